@@ -1,0 +1,13 @@
+#pragma once
+// The svslam subcommands. Each takes the words after its name, prints its JSON result on
+// stdout and errors on stderr, and returns the process exit code (0 = success).
+#include <string>
+#include <vector>
+
+namespace svslam::cli {
+
+int runDisparity(const std::vector<std::string>& args);
+int runEvalDisparity(const std::vector<std::string>& args);
+int runFitSigma(const std::vector<std::string>& args);
+
+}  // namespace svslam::cli

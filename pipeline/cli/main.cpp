@@ -1,0 +1,49 @@
+// svslam: the one executable, with subcommands.
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "pipeline/cli/commands.hpp"
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: svslam <command> [options]\n"
+    "\n"
+    "svslam: real-time stereo-vision SLAM (dense census/SAD stereo, EKF, LCM).\n"
+    "\n"
+    "commands:\n"
+    "  disparity        dense disparity of a rectified stereo pair (census or SAD correlation)\n"
+    "  eval-disparity   score a disparity map (given or computed) against ground truth\n"
+    "  fit-sigma        fit the curvature -> sigma_d model of the disparity on ground truth\n"
+    "\n"
+    "Run 'svslam <command> --help' for the options of a command.\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fputs(kUsage, stderr);
+    return 2;
+  }
+  const std::string cmd = argv[1];
+  const std::vector<std::string> args(argv + 2, argv + argc);
+  try {
+    if (cmd == "--help" || cmd == "-h" || cmd == "help") {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (cmd == "disparity") return svslam::cli::runDisparity(args);
+    if (cmd == "eval-disparity") return svslam::cli::runEvalDisparity(args);
+    if (cmd == "fit-sigma") return svslam::cli::runFitSigma(args);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "svslam %s: out of memory\n", cmd.c_str());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "svslam %s: internal error: %s\n", cmd.c_str(), e.what());
+    return 1;
+  }
+  std::fprintf(stderr, "svslam: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
+  return 2;
+}

@@ -1,0 +1,321 @@
+#include "stereo/dense_stereo.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <string>
+
+#include "stereo/prefilter.hpp"
+
+namespace svslam {
+namespace {
+
+constexpr std::ptrdiff_t kXo = 32;  // column of x = 0 inside a cost plane (room for box padding)
+constexpr std::uint16_t kImpossible = 0xFFFF;
+
+std::ptrdiff_t roundUp(std::ptrdiff_t v, std::ptrdiff_t m) { return (v + m - 1) / m * m; }
+int clampRow(int r, int h) { return std::clamp(r, 0, h - 1); }
+
+}  // namespace
+
+struct DenseStereo::Stripe {
+  int y0 = 0;
+  int y1 = 0;
+  int ring_size = 0;
+  AlignedBuffer<std::uint16_t> ring;  // ring_size cost rows of numDisp planes
+  std::vector<int> ring_row;          // image row held by each ring slot, -1 if none
+  AlignedBuffer<std::uint16_t> colsum;
+  AlignedBuffer<std::uint16_t> agg;
+  AlignedBuffer<std::uint16_t> best_cost, second;
+  AlignedBuffer<std::int16_t> best_idx, best_idx_r;
+  std::vector<std::uint32_t> tex_col, tex_row;
+  std::vector<std::uint8_t> grad;
+  DenseStereoStats stats;
+};
+
+DenseStereo::~DenseStereo() = default;
+
+DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
+    : params_(params), width_(width), height_(height) {
+  init_status_ = params_.validate();
+  if (!init_status_) return;
+  if (width <= 0 || height <= 0) {
+    init_status_ = Status::invalidArgument("image size must be > 0");
+    return;
+  }
+  if (params_.max_disp >= width) {
+    init_status_ = Status::invalidArgument("max_disp (" + std::to_string(params_.max_disp) +
+                                           ") must be < image width (" + std::to_string(width) + ")");
+    return;
+  }
+  k_ = &simd::kernels(params_.backend);
+  const int D = params_.numDisp();
+  const bool census = params_.cost == MatchingCost::kCensus;
+  int need = 1;  // the texture gradient reads x +- 1
+  if (census) need = std::max({need, params_.census_w / 2, params_.census_h / 2});
+  if (!census && params_.prefilter == SadPrefilter::kMeanRemoval) need = std::max(need, params_.prefilter_size / 2);
+  pad_x_ = need;
+  pad_y_ = need;
+  padded_left_.resize(width + 2 * pad_x_, height + 2 * pad_y_);
+  padded_right_.resize(width + 2 * pad_x_, height + 2 * pad_y_);
+  right_pad_ = static_cast<int>(roundUp(params_.max_disp, 8));
+  row_stride_ = roundUp(right_pad_ + width + 8, 64);
+  const std::size_t rows_n = static_cast<std::size_t>(row_stride_) * static_cast<std::size_t>(height);
+  if (census) {
+    census_left_.resize(rows_n);
+    census_right_.resize(rows_n);
+  } else {
+    filt_left_.resize(rows_n);
+    filt_right_.resize(rows_n);
+  }
+  cost_stride_ = roundUp(kXo + width + 32, 32);
+  agg_stride_ = roundUp(width + params_.max_disp + 32, 32);
+  const int stripes = std::min(params_.num_stripes, height);
+  for (int s = 0; s < stripes; ++s) {
+    auto st = std::make_unique<Stripe>();
+    st->y0 = static_cast<int>(static_cast<long>(height) * s / stripes);
+    st->y1 = static_cast<int>(static_cast<long>(height) * (s + 1) / stripes);
+    st->ring_size = params_.window_h + 1;
+    const std::size_t plane_n = static_cast<std::size_t>(D) * static_cast<std::size_t>(cost_stride_);
+    st->ring.resize(plane_n * static_cast<std::size_t>(st->ring_size));
+    st->ring_row.assign(static_cast<std::size_t>(st->ring_size), -1);
+    st->colsum.resize(plane_n);
+    st->agg.resize(static_cast<std::size_t>(D) * static_cast<std::size_t>(agg_stride_));
+    std::fill(st->agg.data(), st->agg.data() + st->agg.size(), kImpossible);
+    st->best_cost.resize(static_cast<std::size_t>(width));
+    st->second.resize(static_cast<std::size_t>(width));
+    st->best_idx.resize(static_cast<std::size_t>(width));
+    st->best_idx_r.resize(static_cast<std::size_t>(width));
+    st->tex_col.assign(static_cast<std::size_t>(width), 0);
+    st->tex_row.assign(static_cast<std::size_t>(width), 0);
+    st->grad.assign(static_cast<std::size_t>(width), 0);
+    stripes_.push_back(std::move(st));
+  }
+}
+
+void DenseStereo::padImage(ImageView<const std::uint8_t> src, ImageU8& dst, int y0, int y1) const {
+  // Padded rows [y0, y1) of dst (which has pad_y_ extra rows on top and bottom).
+  for (int py = y0; py < y1; ++py) {
+    const std::uint8_t* s = src.row(clampRow(py - pad_y_, height_));
+    std::uint8_t* d = dst.row(py);
+    std::memset(d, s[0], static_cast<std::size_t>(pad_x_));
+    std::memcpy(d + pad_x_, s, static_cast<std::size_t>(width_));
+    std::memset(d + pad_x_ + width_, s[width_ - 1], static_cast<std::size_t>(pad_x_));
+  }
+}
+
+void DenseStereo::prepareRows(int y0, int y1) {
+  const bool census = params_.cost == MatchingCost::kCensus;
+  std::vector<std::uint32_t> scratch;
+  if (!census && params_.prefilter == SadPrefilter::kMeanRemoval)
+    scratch.resize(static_cast<std::size_t>(width_ + params_.prefilter_size));
+  for (int y = y0; y < y1; ++y) {
+    for (int side = 0; side < 2; ++side) {
+      const ImageU8& padded = side == 0 ? padded_left_ : padded_right_;
+      const std::uint8_t* center = padded.row(y + pad_y_) + pad_x_;
+      const std::size_t off = static_cast<std::size_t>(y) * static_cast<std::size_t>(row_stride_) +
+                              static_cast<std::size_t>(right_pad_);
+      if (census) {
+        std::uint64_t* out = (side == 0 ? census_left_ : census_right_).data() + off;
+        const std::uint8_t* win = center - (params_.census_h / 2) * padded.stride() - params_.census_w / 2;
+        k_->censusRow(win, padded.stride(), width_, params_.census_w, params_.census_h, out);
+        if (side == 1) std::fill(out - right_pad_, out, out[0]);
+      } else {
+        std::uint8_t* out = (side == 0 ? filt_left_ : filt_right_).data() + off;
+        switch (params_.prefilter) {
+          case SadPrefilter::kNone: copyRow(center, width_, out); break;
+          case SadPrefilter::kXSobel: xSobelRow(center, padded.stride(), width_, params_.prefilter_cap, out); break;
+          case SadPrefilter::kMeanRemoval:
+            meanRemovalRow(center, padded.stride(), width_, params_.prefilter_size,
+                           params_.prefilter_cap, scratch.data(), out);
+            break;
+        }
+        if (side == 1) std::memset(out - right_pad_, out[0], static_cast<std::size_t>(right_pad_));
+      }
+    }
+  }
+}
+
+const std::uint16_t* DenseStereo::costRow(Stripe& s, int row) {
+  const int slot = row % s.ring_size;
+  const std::size_t plane_n = static_cast<std::size_t>(params_.numDisp()) * static_cast<std::size_t>(cost_stride_);
+  std::uint16_t* dst = s.ring.data() + plane_n * static_cast<std::size_t>(slot);
+  if (s.ring_row[static_cast<std::size_t>(slot)] != row) {
+    const std::size_t off = static_cast<std::size_t>(row) * static_cast<std::size_t>(row_stride_) +
+                            static_cast<std::size_t>(right_pad_);
+    if (params_.cost == MatchingCost::kCensus) {
+      k_->censusCostRow(census_left_.data() + off, census_right_.data() + off, width_,
+                        params_.min_disp, params_.numDisp(), dst + kXo, cost_stride_);
+    } else {
+      k_->sadCostRow(filt_left_.data() + off, filt_right_.data() + off, width_, params_.min_disp,
+                     params_.numDisp(), dst + kXo, cost_stride_);
+    }
+    s.ring_row[static_cast<std::size_t>(slot)] = row;
+  }
+  return dst;
+}
+
+void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
+  const int W = width_;
+  const int D = params_.numDisp();
+  const int d0 = params_.min_disp;
+  const int rh = params_.window_h / 2;
+  const int rw = params_.window_w / 2;
+  const std::size_t plane_n = static_cast<std::size_t>(D) * static_cast<std::size_t>(cost_stride_);
+  const double area = static_cast<double>(params_.window_w) * params_.window_h;
+  const bool use_texture = params_.texture_threshold > 0.0f;
+  const double texture_limit = static_cast<double>(params_.texture_threshold) * 2.0 * area;
+  const float inf = std::numeric_limits<float>::infinity();
+  std::fill(s.ring_row.begin(), s.ring_row.end(), -1);
+  s.stats = DenseStereoStats{};
+
+  // Central-difference gradient |I(x+1) - I(x-1)| of left row r, for the texture filter.
+  auto gradRow = [&](int r) {
+    const std::uint8_t* p = padded_left_.row(r + pad_y_) + pad_x_;
+    for (int x = 0; x < W; ++x) s.grad[static_cast<std::size_t>(x)] = static_cast<std::uint8_t>(std::abs(p[x + 1] - p[x - 1]));
+  };
+  auto texAdd = [&](int r, int sign) {
+    gradRow(r);
+    for (int x = 0; x < W; ++x)
+      s.tex_col[static_cast<std::size_t>(x)] += static_cast<std::uint32_t>(sign * s.grad[static_cast<std::size_t>(x)]);
+  };
+
+  for (int y = s.y0; y < s.y1; ++y) {
+    // 1-2. Vertical running sum of the cost planes over rows [y - rh, y + rh] (clamped).
+    if (y == s.y0) {
+      std::memset(s.colsum.data(), 0, plane_n * sizeof(std::uint16_t));
+      if (use_texture) std::fill(s.tex_col.begin(), s.tex_col.end(), 0u);
+      for (int r = y - rh; r <= y + rh; ++r) {
+        k_->addSubRow(s.colsum.data(), costRow(s, clampRow(r, height_)), nullptr, plane_n);
+        if (use_texture) texAdd(clampRow(r, height_), 1);
+      }
+    } else {
+      const std::uint16_t* add = costRow(s, clampRow(y + rh, height_));
+      const std::uint16_t* sub = costRow(s, clampRow(y - rh - 1, height_));
+      k_->addSubRow(s.colsum.data(), add, sub, plane_n);
+      if (use_texture) {
+        texAdd(clampRow(y + rh, height_), 1);
+        texAdd(clampRow(y - rh - 1, height_), -1);
+      }
+    }
+    // Horizontal box per plane, borders replicated; then mark x < d as impossible.
+    for (int i = 0; i < D; ++i) {
+      std::uint16_t* col = s.colsum.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_);
+      std::fill(col + kXo - rw, col + kXo, col[kXo]);
+      std::fill(col + kXo + W, col + kXo + W + rw, col[kXo + W - 1]);
+      std::uint16_t* agg = s.agg.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(agg_stride_);
+      k_->boxRow(col + kXo - rw, W, params_.window_w, agg);
+      std::fill(agg, agg + std::min(W, d0 + i), kImpossible);
+    }
+    // 3. Winner-take-all (left), second best, right WTA.
+    k_->wtaLeftRow(s.agg.data(), agg_stride_, W, D, s.best_cost.data(), s.best_idx.data());
+    if (params_.uniqueness_pct > 0)
+      k_->secondBestRow(s.agg.data(), agg_stride_, W, D, s.best_idx.data(), s.second.data());
+    if (params_.lr_check)
+      k_->wtaRightRow(s.agg.data(), agg_stride_, W, d0, D, s.best_idx_r.data());
+    if (use_texture) {
+      // Horizontal box of the texture column sums, borders replicated.
+      std::uint32_t sum = 0;
+      for (int k = -rw; k <= rw; ++k) sum += s.tex_col[static_cast<std::size_t>(std::clamp(k, 0, W - 1))];
+      for (int x = 0; x < W; ++x) {
+        if (x > 0) {
+          sum += s.tex_col[static_cast<std::size_t>(std::min(x + rw, W - 1))];
+          sum -= s.tex_col[static_cast<std::size_t>(std::max(x - rw - 1, 0))];
+        }
+        s.tex_row[static_cast<std::size_t>(x)] = sum;
+      }
+    }
+    // 4-5. Filters and sub-pixel refinement.
+    float* disp = out.disparity_px.row(y);
+    float* sig = out.sigma_d_px.row(y);
+    float* curv = out.curvature.row(y);
+    for (int x = 0; x < W; ++x) {
+      disp[x] = inf;
+      sig[x] = inf;
+      curv[x] = inf;
+      const int idx = s.best_idx[static_cast<std::size_t>(x)];
+      if (idx < 0) { ++s.stats.no_candidate; continue; }
+      if (use_texture && static_cast<double>(s.tex_row[static_cast<std::size_t>(x)]) < texture_limit) {
+        ++s.stats.low_texture;
+        continue;
+      }
+      const std::uint32_t best = s.best_cost[static_cast<std::size_t>(x)];
+      if (params_.uniqueness_pct > 0) {
+        const std::uint32_t second = s.second[static_cast<std::size_t>(x)];
+        // No competitor at all (fewer than 3 candidates, at the left border) cannot be verified.
+        if (second == kImpossible ||
+            static_cast<std::uint64_t>(second) * 100u <= static_cast<std::uint64_t>(best) * (100u + static_cast<std::uint32_t>(params_.uniqueness_pct))) {
+          ++s.stats.not_unique;
+          continue;
+        }
+      }
+      if (params_.lr_check) {
+        const int xr = x - (d0 + idx);
+        const int idr = s.best_idx_r[static_cast<std::size_t>(xr)];
+        if (idr < 0 || std::abs(idr - idx) > params_.lr_max_diff) { ++s.stats.lr_inconsistent; continue; }
+      }
+      float delta = 0.0f;
+      float kappa = 0.0f;
+      if (idx > 0 && idx + 1 < D) {
+        const int cm = s.agg[static_cast<std::size_t>(idx - 1) * static_cast<std::size_t>(agg_stride_) + static_cast<std::size_t>(x)];
+        const int cp = s.agg[static_cast<std::size_t>(idx + 1) * static_cast<std::size_t>(agg_stride_) + static_cast<std::size_t>(x)];
+        const int denom = cm + cp - 2 * static_cast<int>(best);
+        if (cp != kImpossible && denom > 0) {
+          if (params_.subpixel) delta = static_cast<float>(cm - cp) / static_cast<float>(2 * denom);
+          kappa = static_cast<float>(denom / area);
+        }
+      }
+      disp[x] = static_cast<float>(d0 + idx) + delta;
+      sig[x] = params_.sigma_model.sigmaFor(kappa);
+      curv[x] = kappa;
+      ++s.stats.valid;
+    }
+  }
+}
+
+Status DenseStereo::process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                            DisparityResult& out) {
+  SerialExecutor serial;
+  return process(left, right, out, serial);
+}
+
+Status DenseStereo::process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                            DisparityResult& out, Executor& executor) {
+  if (!init_status_) return init_status_;
+  if (left.empty() || right.empty()) return Status::invalidArgument("empty input image");
+  if (left.width != width_ || left.height != height_ || right.width != width_ || right.height != height_)
+    return Status::invalidArgument(
+        "image size mismatch: stage built for " + std::to_string(width_) + "x" + std::to_string(height_) +
+        ", got left " + std::to_string(left.width) + "x" + std::to_string(left.height) + " and right " +
+        std::to_string(right.width) + "x" + std::to_string(right.height));
+  out.disparity_px.resize(width_, height_);
+  out.sigma_d_px.resize(width_, height_);
+  out.curvature.resize(width_, height_);
+
+  const int n = static_cast<int>(stripes_.size());
+  const int padded_h = height_ + 2 * pad_y_;
+  executor.parallelFor(n, [&](int t) {
+    const int y0 = static_cast<int>(static_cast<long>(padded_h) * t / n);
+    const int y1 = static_cast<int>(static_cast<long>(padded_h) * (t + 1) / n);
+    padImage(left, padded_left_, y0, y1);
+    padImage(right, padded_right_, y0, y1);
+  });
+  executor.parallelFor(n, [&](int t) { prepareRows(stripes_[static_cast<std::size_t>(t)]->y0, stripes_[static_cast<std::size_t>(t)]->y1); });
+  executor.parallelFor(n, [&](int t) { matchRows(*stripes_[static_cast<std::size_t>(t)], out); });
+
+  DenseStereoStats total;
+  for (const auto& s : stripes_) {
+    total.valid += s->stats.valid;
+    total.no_candidate += s->stats.no_candidate;
+    total.low_texture += s->stats.low_texture;
+    total.not_unique += s->stats.not_unique;
+    total.lr_inconsistent += s->stats.lr_inconsistent;
+  }
+  total.backend = k_->name;
+  out.stats = total;
+  return Status::ok();
+}
+
+}  // namespace svslam
