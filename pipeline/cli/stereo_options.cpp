@@ -8,7 +8,7 @@ namespace svslam::cli {
 void addStereoOptions(ArgParser& p) {
   p.addOption("min-disp", "M", "smallest disparity searched, px (>= 0)", "0");
   p.addOption("method", "census|sad", "matching cost: census (Hamming) or sad (8-bit intensities)", "census");
-  p.addOption("window", "WxH", "aggregation window, odd sides <= 31", "5x5");
+  p.addOption("window", "WxH", "aggregation window, odd sides <= 31", "9x9");
   p.addOption("census", "WxH", "census window, odd sides, at most 64 neighbours", "9x7");
   p.addOption("prefilter", "none|mean|xsobel", "SAD prefilter (as OpenCV BM)", "xsobel");
   p.addOption("prefilter-cap", "N", "SAD prefilter clip, grey levels 1..63", "31");

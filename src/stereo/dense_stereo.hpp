@@ -46,8 +46,8 @@ struct DenseStereoParams {
   MatchingCost cost = MatchingCost::kCensus;
   int census_w = 9;  // census window width, px, odd, census_w * census_h - 1 <= 64
   int census_h = 7;  // census window height, px, odd
-  int window_w = 5;  // aggregation window width, px, odd, 1..31
-  int window_h = 5;  // aggregation window height, px, odd, 1..31
+  int window_w = 9;  // aggregation window width, px, odd, 1..31
+  int window_h = 9;  // aggregation window height, px, odd, 1..31
   SadPrefilter prefilter = SadPrefilter::kXSobel;  // SAD only
   int prefilter_cap = 31;   // clip of the prefiltered value, grey levels, 1..63
   int prefilter_size = 9;   // mean-removal window, px, odd, 3..21

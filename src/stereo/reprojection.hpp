@@ -1,0 +1,49 @@
+#pragma once
+// 3D reprojection of a disparity map with per-point covariance (seed 001 sec 4.1).
+//
+// Left camera frame (x right, y down, z forward), rectified pair with focal f (px), principal
+// point (cx, cy) and baseline b (m). For pixel (u, v) with disparity d (px):
+//     z = f b / d,   x = (u - cx) b / d,   y = (v - cy) b / d.
+// First-order propagation of the independent errors sigma_u = sigma_v = sigma_uv_px (image-plane
+// localisation) and sigma_d (from the peak curvature):  Sigma_p = J diag(su^2, sv^2, sd^2) J^T,
+//     J = d(x, y, z)/d(u, v, d) = [ b/d   0    -(u - cx) b / d^2 ]
+//                                 [ 0     b/d  -(v - cy) b / d^2 ]
+//                                 [ 0     0    -f b / d^2        ]
+// so sigma_z = z^2 sigma_d / (f b), the familiar depth error of stereo.
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/camera.hpp"
+#include "core/image.hpp"
+#include "core/status.hpp"
+
+namespace svslam {
+
+struct StereoPoint {
+  Eigen::Vector3d p_cam;  // metres, left camera frame
+  Eigen::Matrix3d cov;    // m^2
+  float u_px = 0.0f;      // pixel of the left image
+  float v_px = 0.0f;
+  float d_px = 0.0f;      // disparity
+  float sigma_d_px = 0.0f;
+};
+
+struct ReprojectionParams {
+  double sigma_uv_px = 0.5;       // image-plane standard deviation of a pixel position, px, >= 0
+  double min_disparity_px = 0.5;  // smaller disparities (too far, unstable) are skipped, px, > 0
+  double max_depth_m = 1e9;       // points farther than this are skipped, m, > 0
+  int step_px = 1;                // take every step-th pixel in x and y, >= 1
+  Status validate() const;
+};
+
+// One point with covariance from (u, v, d, sigma_d). Precondition: d > 0, calibration valid.
+StereoPoint reprojectPixel(const StereoCalibration& calib, double u_px, double v_px, double d_px,
+                           double sigma_d_px, double sigma_uv_px);
+
+// Every valid pixel (finite disparity and sigma) of a disparity map; `out` is cleared first.
+Status reprojectDisparity(ImageView<const float> disparity_px, ImageView<const float> sigma_d_px,
+                          const StereoCalibration& calib, const ReprojectionParams& params,
+                          std::vector<StereoPoint>& out);
+
+}  // namespace svslam
