@@ -14,6 +14,28 @@ namespace svslam::simd {
 
 enum class Backend { kAuto, kScalar, kAvx2, kAvx512, kNeon };
 
+// Streaming winner-take-all state of one image row, updated plane by plane (disparity index i
+// ascending) by wtaUpdateRow. All arrays have `width` entries. Meaning once every plane is done:
+//   best[x]   min_i agg_i[x]; bidx[x] the smallest i reaching it, -1 if every agg is 0xFFFF
+//   second[x] min of agg_i[x] over i with |i - bidx[x]| > 1 (0xFFFF if none)
+//   cm[x], cp[x]  agg at bidx - 1 and bidx + 1 (0xFFFF when outside the range)
+//   best_r[xr], idx_r[xr]  the right image's WTA on the same costs: candidates agg_i[xr + d0 + i],
+//                          smallest i on ties, -1 when none is below 0xFFFF
+// pm1, pm2 are internal prefix minima (over planes <= i-1 and <= i-2). wtaInitRow sets the start.
+struct WtaRowState {
+  std::uint16_t* best;
+  std::int16_t* bidx;
+  std::uint16_t* second;
+  std::uint16_t* cm;
+  std::uint16_t* cp;
+  std::uint16_t* pm1;
+  std::uint16_t* pm2;
+  std::uint16_t* best_r;
+  std::int16_t* idx_r;
+};
+
+void wtaInitRow(const WtaRowState& s, int width);
+
 struct StereoKernels {
   Backend backend;
   const char* name;
@@ -24,36 +46,27 @@ struct StereoKernels {
   void (*censusRow)(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
                     int win_h, std::uint64_t* out);
 
-  // cost[i][x] = popcount(left[x] ^ right[x - (d0 + i)]) for x in [0, width).
-  // Precondition: right is readable at indices [-(d0 + num_disp - 1), width).
-  void (*censusCostRow)(const std::uint64_t* left, const std::uint64_t* right, int width, int d0,
-                        int num_disp, std::uint16_t* cost, std::ptrdiff_t cost_stride);
+  // One cost plane: cost[x] = popcount(left[x] ^ right[x - d]) for x in [0, width).
+  // Precondition: right is readable at indices [-d, width - d).
+  void (*censusCostRow)(const std::uint64_t* left, const std::uint64_t* right, int width, int d,
+                        std::uint8_t* cost);
 
-  // cost[i][x] = |left[x] - right[x - (d0 + i)]| (same preconditions as censusCostRow).
-  void (*sadCostRow)(const std::uint8_t* left, const std::uint8_t* right, int width, int d0,
-                     int num_disp, std::uint16_t* cost, std::ptrdiff_t cost_stride);
+  // One cost plane: cost[x] = |left[x] - right[x - d]| (same preconditions).
+  void (*sadCostRow)(const std::uint8_t* left, const std::uint8_t* right, int width, int d,
+                     std::uint8_t* cost);
 
   // acc[j] = acc[j] + add[j] - sub[j] (mod 2^16) for j in [0, n); sub may be null (add only).
-  void (*addSubRow)(std::uint16_t* acc, const std::uint16_t* add, const std::uint16_t* sub,
+  void (*addSubRow)(std::uint16_t* acc, const std::uint8_t* add, const std::uint8_t* sub,
                     std::size_t n);
 
   // Horizontal box sum: out[x] = sum_{k=0}^{win_w-1} in[x + k] for x in [0, width) (mod 2^16).
   void (*boxRow)(const std::uint16_t* in, int width, int win_w, std::uint16_t* out);
 
-  // Left-image winner-take-all: for each x, best_cost[x] = min_i cost[i][x] and best_idx[x] the
-  // smallest i reaching it, or -1 when every cost is 0xFFFF (the "impossible" marker).
-  void (*wtaLeftRow)(const std::uint16_t* cost, std::ptrdiff_t stride, int width, int num_disp,
-                     std::uint16_t* best_cost, std::int16_t* best_idx);
-
-  // second[x] = min of cost[i][x] over i with |i - best_idx[x]| > 1 (0xFFFF when none).
-  void (*secondBestRow)(const std::uint16_t* cost, std::ptrdiff_t stride, int width, int num_disp,
-                        const std::int16_t* best_idx, std::uint16_t* second);
-
-  // Right-image winner-take-all on the same costs: for right pixel xr the candidates are
-  // cost[i][xr + d0 + i]; best_idx_r[xr] = smallest argmin, -1 when all are 0xFFFF.
-  // Precondition: row i is readable at [d0 + i, width + d0 + i) (pad with 0xFFFF).
-  void (*wtaRightRow)(const std::uint16_t* cost, std::ptrdiff_t stride, int width, int d0,
-                      int num_disp, std::int16_t* best_idx_r);
+  // Adds planes i0 .. i0 + n_planes - 1 to the streaming WTA state. Plane i0 + p is the row
+  // agg + p * stride (aggregated costs, [0, width)); the row agg - stride must hold plane
+  // i0 - 1 (0xFFFF-filled when i0 = 0). Right-image candidates of plane i start at x = d0 + i.
+  void (*wtaUpdateRows)(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0,
+                        int width, int d0, const WtaRowState& s);
 };
 
 const StereoKernels& scalarKernels();

@@ -1,7 +1,7 @@
 // AVX-512 (F, BW, VL, VPOPCNTDQ) backend of the stereo row kernels. Compiled with its own
 // instruction-set flags and selected at run time; bit-exact with stereo_kernels_scalar.cpp.
-// Vector bodies work on 32 x uint16 or 64 x uint8 columns; every kernel is independent per
-// column, so the tails are handed to the scalar reference at an offset.
+// Vector bodies work on 32 x uint16 or 64 x uint8 columns; tails use masked loads and stores, or
+// (for the per-column kernels) the scalar reference at an offset.
 #include <immintrin.h>
 
 #include "simd/stereo_kernels.hpp"
@@ -84,125 +84,135 @@ void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int wi
   if (x < width) scalarKernels().censusRow(win + x, stride, width - x, win_w, win_h, out + x);
 }
 
-void censusCostRow(const std::uint64_t* left, const std::uint64_t* right, int width, int d0,
-                   int num_disp, std::uint16_t* cost, std::ptrdiff_t cost_stride) {
-  for (int i = 0; i < num_disp; ++i) {
-    const std::uint64_t* r = right - (d0 + i);
-    std::uint16_t* c = cost + i * cost_stride;
-    int x = 0;
-    for (; x + 16 <= width; x += 16) {
-      const __m512i a = _mm512_popcnt_epi64(
-          _mm512_xor_si512(_mm512_loadu_si512(left + x), _mm512_loadu_si512(r + x)));
-      const __m512i b = _mm512_popcnt_epi64(
-          _mm512_xor_si512(_mm512_loadu_si512(left + x + 8), _mm512_loadu_si512(r + x + 8)));
-      const __m256i packed = _mm256_inserti128_si256(
-          _mm256_castsi128_si256(_mm512_cvtepi64_epi16(a)), _mm512_cvtepi64_epi16(b), 1);
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(c + x), packed);
-    }
-    if (x < width) scalarKernels().censusCostRow(left + x, right + x, width - x, d0 + i, 1, c + x, cost_stride);
+inline __mmask32 tailMask32(int n) { return n >= 32 ? 0xFFFFFFFFu : ((1u << n) - 1u); }
+
+void censusCostRow(const std::uint64_t* left, const std::uint64_t* right, int width, int d,
+                   std::uint8_t* cost) {
+  const std::uint64_t* r = right - d;
+  int x = 0;
+  for (; x + 16 <= width; x += 16) {
+    const __m512i a = _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(left + x), _mm512_loadu_si512(r + x)));
+    const __m512i b = _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(left + x + 8), _mm512_loadu_si512(r + x + 8)));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(cost + x),
+                     _mm_unpacklo_epi64(_mm512_cvtepi64_epi8(a), _mm512_cvtepi64_epi8(b)));
   }
+  if (x < width) scalarKernels().censusCostRow(left + x, right + x, width - x, d, cost + x);
 }
 
-void sadCostRow(const std::uint8_t* left, const std::uint8_t* right, int width, int d0,
-                int num_disp, std::uint16_t* cost, std::ptrdiff_t cost_stride) {
-  for (int i = 0; i < num_disp; ++i) {
-    const std::uint8_t* r = right - (d0 + i);
-    std::uint16_t* c = cost + i * cost_stride;
-    int x = 0;
-    for (; x + 32 <= width; x += 32) {
-      const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(left + x));
-      const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + x));
-      const __m256i ad = _mm256_or_si256(_mm256_subs_epu8(a, b), _mm256_subs_epu8(b, a));
-      _mm512_storeu_si512(c + x, _mm512_cvtepu8_epi16(ad));
-    }
-    if (x < width) scalarKernels().sadCostRow(left + x, right + x, width - x, d0 + i, 1, c + x, cost_stride);
+void sadCostRow(const std::uint8_t* left, const std::uint8_t* right, int width, int d,
+                std::uint8_t* cost) {
+  const std::uint8_t* r = right - d;
+  int x = 0;
+  for (; x + 64 <= width; x += 64) {
+    const __m512i a = _mm512_loadu_si512(left + x);
+    const __m512i b = _mm512_loadu_si512(r + x);
+    _mm512_storeu_si512(cost + x, _mm512_or_si512(_mm512_subs_epu8(a, b), _mm512_subs_epu8(b, a)));
   }
+  if (x < width) scalarKernels().sadCostRow(left + x, right + x, width - x, d, cost + x);
 }
 
-void addSubRow(std::uint16_t* acc, const std::uint16_t* add, const std::uint16_t* sub, std::size_t n) {
+void addSubRow(std::uint16_t* acc, const std::uint8_t* add, const std::uint8_t* sub, std::size_t n) {
   std::size_t j = 0;
-  if (sub == nullptr) {
-    for (; j + 32 <= n; j += 32)
-      _mm512_storeu_si512(acc + j, _mm512_add_epi16(_mm512_loadu_si512(acc + j), _mm512_loadu_si512(add + j)));
-  } else {
-    for (; j + 32 <= n; j += 32) {
-      const __m512i v = _mm512_add_epi16(_mm512_loadu_si512(acc + j), _mm512_loadu_si512(add + j));
-      _mm512_storeu_si512(acc + j, _mm512_sub_epi16(v, _mm512_loadu_si512(sub + j)));
-    }
+  for (; j < n; j += 32) {
+    const __mmask32 m = tailMask32(static_cast<int>(n - j));
+    __m512i v = _mm512_add_epi16(_mm512_maskz_loadu_epi16(m, acc + j),
+                                 _mm512_cvtepu8_epi16(_mm256_maskz_loadu_epi8(m, add + j)));
+    if (sub != nullptr) v = _mm512_sub_epi16(v, _mm512_cvtepu8_epi16(_mm256_maskz_loadu_epi8(m, sub + j)));
+    _mm512_mask_storeu_epi16(acc + j, m, v);
   }
-  if (j < n) scalarKernels().addSubRow(acc + j, add + j, sub == nullptr ? nullptr : sub + j, n - j);
 }
 
 void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
-  int x = 0;
-  for (; x + 32 <= width; x += 32) {
-    __m512i s = _mm512_loadu_si512(in + x);
-    for (int k = 1; k < win_w; ++k) s = _mm512_add_epi16(s, _mm512_loadu_si512(in + x + k));
-    _mm512_storeu_si512(out + x, s);
+  for (int x = 0; x < width; x += 32) {
+    const __mmask32 m = tailMask32(width - x);
+    __m512i s = _mm512_maskz_loadu_epi16(m, in + x);
+    for (int k = 1; k < win_w; ++k) s = _mm512_add_epi16(s, _mm512_maskz_loadu_epi16(m, in + x + k));
+    _mm512_mask_storeu_epi16(out + x, m, s);
   }
-  if (x < width) scalarKernels().boxRow(in + x, width - x, win_w, out + x);
 }
 
-void wtaLeftRow(const std::uint16_t* cost, std::ptrdiff_t stride, int width, int num_disp,
-                std::uint16_t* best_cost, std::int16_t* best_idx) {
+// The left-image state of 32 columns stays in registers across the planes of a block; updates
+// are branch-free blends. The ragged end goes through the scalar reference on a sub-range.
+void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0,
+                   int width, int d0, const WtaRowState& s) {
+  std::uint16_t* const s_best = s.best;
+  std::int16_t* const s_bidx = s.bidx;
+  std::uint16_t* const s_second = s.second;
+  std::uint16_t* const s_cm = s.cm;
+  std::uint16_t* const s_cp = s.cp;
+  std::uint16_t* const s_pm1 = s.pm1;
+  std::uint16_t* const s_pm2 = s.pm2;
+  std::uint16_t* const s_best_r = s.best_r;
+  std::int16_t* const s_idx_r = s.idx_r;
+  const __m512i ones = _mm512_set1_epi16(-1);
   int x = 0;
   for (; x + 32 <= width; x += 32) {
-    __m512i best = _mm512_set1_epi16(-1);
-    __m512i idx = _mm512_set1_epi16(-1);
-    for (int i = 0; i < num_disp; ++i) {
-      const __m512i c = _mm512_loadu_si512(cost + i * stride + x);
-      const __mmask32 m = _mm512_cmplt_epu16_mask(c, best);
-      best = _mm512_mask_mov_epi16(best, m, c);
-      idx = _mm512_mask_mov_epi16(idx, m, _mm512_set1_epi16(static_cast<short>(i)));
+    __m512i best = _mm512_loadu_si512(s_best + x);
+    __m512i bidx = _mm512_loadu_si512(s_bidx + x);
+    __m512i second = _mm512_loadu_si512(s_second + x);
+    __m512i cm = _mm512_loadu_si512(s_cm + x);
+    __m512i cp = _mm512_loadu_si512(s_cp + x);
+    __m512i pm1 = _mm512_loadu_si512(s_pm1 + x);
+    __m512i pm2 = _mm512_loadu_si512(s_pm2 + x);
+    __m512i prev = _mm512_loadu_si512(agg - stride + x);
+    for (int p = 0; p < n_planes; ++p) {
+      const __m512i vi = _mm512_set1_epi16(static_cast<short>(i0 + p));
+      const __m512i c = _mm512_loadu_si512(agg + p * stride + x);
+      const __mmask32 m_new = _mm512_cmplt_epu16_mask(c, best);
+      const __mmask32 m_adj = _mm512_mask_cmpeq_epi16_mask(static_cast<__mmask32>(~m_new), bidx,
+                                                           _mm512_set1_epi16(static_cast<short>(i0 + p - 1)));
+      const __mmask32 m_sec = _mm512_mask_cmplt_epu16_mask(static_cast<__mmask32>(~(m_new | m_adj)), c, second);
+      second = _mm512_mask_mov_epi16(_mm512_mask_mov_epi16(second, m_new, pm2), m_sec, c);
+      best = _mm512_mask_mov_epi16(best, m_new, c);
+      bidx = _mm512_mask_mov_epi16(bidx, m_new, vi);
+      cm = _mm512_mask_mov_epi16(cm, m_new, prev);
+      cp = _mm512_mask_mov_epi16(_mm512_mask_mov_epi16(cp, m_new, ones), m_adj, c);
+      pm2 = pm1;
+      pm1 = _mm512_min_epu16(pm1, c);
+      prev = c;
     }
-    _mm512_storeu_si512(best_cost + x, best);
-    _mm512_storeu_si512(best_idx + x, idx);
+    _mm512_storeu_si512(s_best + x, best);
+    _mm512_storeu_si512(s_bidx + x, bidx);
+    _mm512_storeu_si512(s_second + x, second);
+    _mm512_storeu_si512(s_cm + x, cm);
+    _mm512_storeu_si512(s_cp + x, cp);
+    _mm512_storeu_si512(s_pm1 + x, pm1);
+    _mm512_storeu_si512(s_pm2 + x, pm2);
   }
-  if (x < width) scalarKernels().wtaLeftRow(cost + x, stride, width - x, num_disp, best_cost + x, best_idx + x);
-}
-
-void secondBestRow(const std::uint16_t* cost, std::ptrdiff_t stride, int width, int num_disp,
-                   const std::int16_t* best_idx, std::uint16_t* second) {
-  int x = 0;
-  const __m512i one = _mm512_set1_epi16(1);
-  for (; x + 32 <= width; x += 32) {
-    const __m512i idx = _mm512_loadu_si512(best_idx + x);
-    __m512i sec = _mm512_set1_epi16(-1);
-    for (int i = 0; i < num_disp; ++i) {
-      const __m512i c = _mm512_loadu_si512(cost + i * stride + x);
-      const __m512i dist = _mm512_abs_epi16(_mm512_sub_epi16(_mm512_set1_epi16(static_cast<short>(i)), idx));
-      const __mmask32 far = _mm512_cmpgt_epi16_mask(dist, one);
-      const __mmask32 m = _mm512_mask_cmplt_epu16_mask(far, c, sec);
-      sec = _mm512_mask_mov_epi16(sec, m, c);
+  if (x < width) {
+    // Left-image part of the tail: the scalar reference on [x, width) without right pixels
+    // (d0 = width - x puts every right candidate out of range).
+    const WtaRowState t{s_best + x, s_bidx + x, s_second + x, s_cm + x, s_cp + x,
+                        s_pm1 + x,  s_pm2 + x,  s_best_r,     s_idx_r};
+    scalarKernels().wtaUpdateRows(agg + x, stride, n_planes, i0, width - x, width - x, t);
+  }
+  for (int p = 0; p < n_planes; ++p) {
+    const int off = d0 + i0 + p;
+    const std::uint16_t* a = agg + p * stride + off;
+    const __m512i vi = _mm512_set1_epi16(static_cast<short>(i0 + p));
+    const int n_right = width - off;
+    int xr = 0;
+    for (; xr + 32 <= n_right; xr += 32) {
+      const __m512i c = _mm512_loadu_si512(a + xr);
+      const __m512i br = _mm512_loadu_si512(s_best_r + xr);
+      const __mmask32 upd = _mm512_cmplt_epu16_mask(c, br);
+      _mm512_storeu_si512(s_best_r + xr, _mm512_mask_mov_epi16(br, upd, c));
+      _mm512_storeu_si512(s_idx_r + xr, _mm512_mask_mov_epi16(_mm512_loadu_si512(s_idx_r + xr), upd, vi));
     }
-    _mm512_storeu_si512(second + x, sec);
-  }
-  if (x < width) scalarKernels().secondBestRow(cost + x, stride, width - x, num_disp, best_idx + x, second + x);
-}
-
-void wtaRightRow(const std::uint16_t* cost, std::ptrdiff_t stride, int width, int d0, int num_disp,
-                 std::int16_t* best_idx_r) {
-  int xr = 0;
-  for (; xr + 32 <= width; xr += 32) {
-    __m512i best = _mm512_set1_epi16(-1);
-    __m512i idx = _mm512_set1_epi16(-1);
-    for (int i = 0; i < num_disp; ++i) {
-      const __m512i c = _mm512_loadu_si512(cost + i * stride + xr + d0 + i);
-      const __mmask32 m = _mm512_cmplt_epu16_mask(c, best);
-      best = _mm512_mask_mov_epi16(best, m, c);
-      idx = _mm512_mask_mov_epi16(idx, m, _mm512_set1_epi16(static_cast<short>(i)));
+    for (; xr < n_right; ++xr) {
+      if (a[xr] < s_best_r[xr]) {
+        s_best_r[xr] = a[xr];
+        s_idx_r[xr] = static_cast<std::int16_t>(i0 + p);
+      }
     }
-    _mm512_storeu_si512(best_idx_r + xr, idx);
   }
-  if (xr < width) scalarKernels().wtaRightRow(cost + xr, stride, width - xr, d0, num_disp, best_idx_r + xr);
 }
 
 }  // namespace
 
 const StereoKernels& avx512Kernels() {
-  static const StereoKernels k{Backend::kAvx512, "avx512", censusRow,  censusCostRow,
-                               sadCostRow,        addSubRow, boxRow,    wtaLeftRow,
-                               secondBestRow,     wtaRightRow};
+  static const StereoKernels k{Backend::kAvx512, "avx512", censusRow, censusCostRow, sadCostRow,
+                               addSubRow,         boxRow,   wtaUpdateRows};
   return k;
 }
 

@@ -5,6 +5,14 @@
 #include "simd/stereo_kernels.hpp"
 
 namespace svslam::simd {
+
+void wtaInitRow(const WtaRowState& s, int width) {
+  for (int x = 0; x < width; ++x) {
+    s.best[x] = s.second[x] = s.cm[x] = s.cp[x] = s.pm1[x] = s.pm2[x] = s.best_r[x] = 0xFFFF;
+    s.bidx[x] = s.idx_r[x] = -1;
+  }
+}
+
 namespace {
 
 void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w, int win_h,
@@ -27,32 +35,23 @@ void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int wi
   }
 }
 
-void censusCostRow(const std::uint64_t* left, const std::uint64_t* right, int width, int d0,
-                   int num_disp, std::uint16_t* cost, std::ptrdiff_t cost_stride) {
-  for (int i = 0; i < num_disp; ++i) {
-    const std::uint64_t* r = right - (d0 + i);
-    std::uint16_t* c = cost + i * cost_stride;
-    for (int x = 0; x < width; ++x)
-      c[x] = static_cast<std::uint16_t>(__builtin_popcountll(left[x] ^ r[x]));
-  }
+void censusCostRow(const std::uint64_t* left, const std::uint64_t* right, int width, int d,
+                   std::uint8_t* cost) {
+  const std::uint64_t* r = right - d;
+  for (int x = 0; x < width; ++x) cost[x] = static_cast<std::uint8_t>(__builtin_popcountll(left[x] ^ r[x]));
 }
 
-void sadCostRow(const std::uint8_t* left, const std::uint8_t* right, int width, int d0,
-                int num_disp, std::uint16_t* cost, std::ptrdiff_t cost_stride) {
-  for (int i = 0; i < num_disp; ++i) {
-    const std::uint8_t* r = right - (d0 + i);
-    std::uint16_t* c = cost + i * cost_stride;
-    for (int x = 0; x < width; ++x) c[x] = static_cast<std::uint16_t>(std::abs(left[x] - r[x]));
-  }
+void sadCostRow(const std::uint8_t* left, const std::uint8_t* right, int width, int d,
+                std::uint8_t* cost) {
+  const std::uint8_t* r = right - d;
+  for (int x = 0; x < width; ++x) cost[x] = static_cast<std::uint8_t>(std::abs(left[x] - r[x]));
 }
 
-void addSubRow(std::uint16_t* acc, const std::uint16_t* add, const std::uint16_t* sub,
-               std::size_t n) {
+void addSubRow(std::uint16_t* acc, const std::uint8_t* add, const std::uint8_t* sub, std::size_t n) {
   if (sub == nullptr) {
     for (std::size_t j = 0; j < n; ++j) acc[j] = static_cast<std::uint16_t>(acc[j] + add[j]);
   } else {
-    for (std::size_t j = 0; j < n; ++j)
-      acc[j] = static_cast<std::uint16_t>(acc[j] + add[j] - sub[j]);
+    for (std::size_t j = 0; j < n; ++j) acc[j] = static_cast<std::uint16_t>(acc[j] + add[j] - sub[j]);
   }
 }
 
@@ -64,56 +63,43 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
   }
 }
 
-void wtaLeftRow(const std::uint16_t* cost, std::ptrdiff_t stride, int width, int num_disp,
-                std::uint16_t* best_cost, std::int16_t* best_idx) {
-  for (int x = 0; x < width; ++x) {
-    best_cost[x] = 0xFFFF;
-    best_idx[x] = -1;
-  }
-  for (int i = 0; i < num_disp; ++i) {
-    const std::uint16_t* c = cost + i * stride;
+void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0,
+                   int width, int d0, const WtaRowState& s) {
+  for (int p = 0; p < n_planes; ++p) {
+    const int i = i0 + p;
+    const std::uint16_t* a = agg + p * stride;
+    const std::uint16_t* prev = a - stride;
     for (int x = 0; x < width; ++x) {
-      if (c[x] < best_cost[x]) {
-        best_cost[x] = c[x];
-        best_idx[x] = static_cast<std::int16_t>(i);
+      const std::uint16_t c = a[x];
+      if (c < s.best[x]) {
+        s.second[x] = s.pm2[x];  // every plane <= i - 2 is a non-neighbour of the new best
+        s.best[x] = c;
+        s.bidx[x] = static_cast<std::int16_t>(i);
+        s.cm[x] = prev[x];
+        s.cp[x] = 0xFFFF;
+      } else if (i == s.bidx[x] + 1) {
+        s.cp[x] = c;
+      } else if (c < s.second[x]) {
+        s.second[x] = c;
+      }
+      s.pm2[x] = s.pm1[x];
+      if (c < s.pm1[x]) s.pm1[x] = c;
+    }
+    for (int x = d0 + i; x < width; ++x) {
+      const int xr = x - (d0 + i);
+      if (a[x] < s.best_r[xr]) {
+        s.best_r[xr] = a[x];
+        s.idx_r[xr] = static_cast<std::int16_t>(i);
       }
     }
-  }
-}
-
-void secondBestRow(const std::uint16_t* cost, std::ptrdiff_t stride, int width, int num_disp,
-                   const std::int16_t* best_idx, std::uint16_t* second) {
-  for (int x = 0; x < width; ++x) second[x] = 0xFFFF;
-  for (int i = 0; i < num_disp; ++i) {
-    const std::uint16_t* c = cost + i * stride;
-    for (int x = 0; x < width; ++x) {
-      if (std::abs(i - best_idx[x]) > 1 && c[x] < second[x]) second[x] = c[x];
-    }
-  }
-}
-
-void wtaRightRow(const std::uint16_t* cost, std::ptrdiff_t stride, int width, int d0,
-                 int num_disp, std::int16_t* best_idx_r) {
-  for (int xr = 0; xr < width; ++xr) {
-    std::uint16_t best = 0xFFFF;
-    std::int16_t idx = -1;
-    for (int i = 0; i < num_disp; ++i) {
-      const std::uint16_t c = cost[i * stride + xr + d0 + i];
-      if (c < best) {
-        best = c;
-        idx = static_cast<std::int16_t>(i);
-      }
-    }
-    best_idx_r[xr] = idx;
   }
 }
 
 }  // namespace
 
 const StereoKernels& scalarKernels() {
-  static const StereoKernels k{Backend::kScalar, "scalar", censusRow,  censusCostRow,
-                               sadCostRow,        addSubRow, boxRow,    wtaLeftRow,
-                               secondBestRow,     wtaRightRow};
+  static const StereoKernels k{Backend::kScalar, "scalar", censusRow, censusCostRow, sadCostRow,
+                               addSubRow,         boxRow,   wtaUpdateRows};
   return k;
 }
 

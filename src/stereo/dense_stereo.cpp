@@ -14,6 +14,7 @@ namespace {
 
 constexpr std::ptrdiff_t kXo = 32;  // column of x = 0 inside a cost plane (room for box padding)
 constexpr std::uint16_t kImpossible = 0xFFFF;
+constexpr int kPlaneBlock = 16;  // disparity planes per WTA pass (their agg rows stay in L1/L2)
 
 std::ptrdiff_t roundUp(std::ptrdiff_t v, std::ptrdiff_t m) { return (v + m - 1) / m * m; }
 int clampRow(int r, int h) { return std::clamp(r, 0, h - 1); }
@@ -24,15 +25,20 @@ struct DenseStereo::Stripe {
   int y0 = 0;
   int y1 = 0;
   int ring_size = 0;
-  AlignedBuffer<std::uint16_t> ring;  // ring_size cost rows of numDisp planes
-  std::vector<int> ring_row;          // image row held by each ring slot, -1 if none
-  AlignedBuffer<std::uint16_t> colsum;
-  AlignedBuffer<std::uint16_t> agg;
-  AlignedBuffer<std::uint16_t> best_cost, second;
-  AlignedBuffer<std::int16_t> best_idx, best_idx_r;
+  AlignedBuffer<std::uint8_t> ring;  // ring_size cost rows of numDisp planes of ring_stride bytes
+  std::vector<int> ring_row;         // image row held by each ring slot, -1 if none
+  AlignedBuffer<std::uint16_t> colsum;  // numDisp planes of cost_stride_, x = 0 at kXo
+  AlignedBuffer<std::uint16_t> agg;  // kPlaneBlock + 1 rows of agg_stride_: previous plane, block
+  AlignedBuffer<std::uint16_t> best, second, cm, cp, pm1, pm2, best_r;
+  AlignedBuffer<std::int16_t> bidx, idx_r;
   std::vector<std::uint32_t> tex_col, tex_row;
   std::vector<std::uint8_t> grad;
   DenseStereoStats stats;
+
+  simd::WtaRowState state() {
+    return {best.data(), bidx.data(), second.data(), cm.data(), cp.data(),
+            pm1.data(),  pm2.data(),  best_r.data(), idx_r.data()};
+  }
 };
 
 DenseStereo::~DenseStereo() = default;
@@ -71,23 +77,25 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
     filt_right_.resize(rows_n);
   }
   cost_stride_ = roundUp(kXo + width + 32, 32);
-  agg_stride_ = roundUp(width + params_.max_disp + 32, 32);
+  ring_stride_ = roundUp(width, 64);
+  agg_stride_ = roundUp(width, 32);
   const int stripes = std::min(params_.num_stripes, height);
   for (int s = 0; s < stripes; ++s) {
     auto st = std::make_unique<Stripe>();
     st->y0 = static_cast<int>(static_cast<long>(height) * s / stripes);
     st->y1 = static_cast<int>(static_cast<long>(height) * (s + 1) / stripes);
     st->ring_size = params_.window_h + 1;
-    const std::size_t plane_n = static_cast<std::size_t>(D) * static_cast<std::size_t>(cost_stride_);
-    st->ring.resize(plane_n * static_cast<std::size_t>(st->ring_size));
+    st->ring.resize(static_cast<std::size_t>(D) * static_cast<std::size_t>(ring_stride_) *
+                    static_cast<std::size_t>(st->ring_size));
     st->ring_row.assign(static_cast<std::size_t>(st->ring_size), -1);
-    st->colsum.resize(plane_n);
-    st->agg.resize(static_cast<std::size_t>(D) * static_cast<std::size_t>(agg_stride_));
-    std::fill(st->agg.data(), st->agg.data() + st->agg.size(), kImpossible);
-    st->best_cost.resize(static_cast<std::size_t>(width));
-    st->second.resize(static_cast<std::size_t>(width));
-    st->best_idx.resize(static_cast<std::size_t>(width));
-    st->best_idx_r.resize(static_cast<std::size_t>(width));
+    st->colsum.resize(static_cast<std::size_t>(D) * static_cast<std::size_t>(cost_stride_));
+    const std::size_t wn = static_cast<std::size_t>(roundUp(width, 64));
+    st->agg.resize(static_cast<std::size_t>(kPlaneBlock + 1) * static_cast<std::size_t>(agg_stride_));
+    for (auto* b : {&st->best, &st->second, &st->cm, &st->cp, &st->pm1,
+                    &st->pm2, &st->best_r})
+      b->resize(wn);
+    st->bidx.resize(wn);
+    st->idx_r.resize(wn);
     st->tex_col.assign(static_cast<std::size_t>(width), 0);
     st->tex_row.assign(static_cast<std::size_t>(width), 0);
     st->grad.assign(static_cast<std::size_t>(width), 0);
@@ -138,23 +146,27 @@ void DenseStereo::prepareRows(int y0, int y1) {
   }
 }
 
-const std::uint16_t* DenseStereo::costRow(Stripe& s, int row) {
-  const int slot = row % s.ring_size;
-  const std::size_t plane_n = static_cast<std::size_t>(params_.numDisp()) * static_cast<std::size_t>(cost_stride_);
-  std::uint16_t* dst = s.ring.data() + plane_n * static_cast<std::size_t>(slot);
-  if (s.ring_row[static_cast<std::size_t>(slot)] != row) {
-    const std::size_t off = static_cast<std::size_t>(row) * static_cast<std::size_t>(row_stride_) +
-                            static_cast<std::size_t>(right_pad_);
-    if (params_.cost == MatchingCost::kCensus) {
-      k_->censusCostRow(census_left_.data() + off, census_right_.data() + off, width_,
-                        params_.min_disp, params_.numDisp(), dst + kXo, cost_stride_);
-    } else {
-      k_->sadCostRow(filt_left_.data() + off, filt_right_.data() + off, width_, params_.min_disp,
-                     params_.numDisp(), dst + kXo, cost_stride_);
-    }
-    s.ring_row[static_cast<std::size_t>(slot)] = row;
-  }
-  return dst;
+std::uint8_t* DenseStereo::ringPlane(Stripe& s, int row, int i) const {
+  const std::size_t slot = static_cast<std::size_t>(row % s.ring_size);
+  return s.ring.data() + (slot * static_cast<std::size_t>(params_.numDisp()) + static_cast<std::size_t>(i)) *
+                             static_cast<std::size_t>(ring_stride_);
+}
+
+void DenseStereo::computeCostPlane(Stripe& s, int row, int i) const {
+  const std::size_t off = static_cast<std::size_t>(row) * static_cast<std::size_t>(row_stride_) +
+                          static_cast<std::size_t>(right_pad_);
+  const int d = params_.min_disp + i;
+  if (params_.cost == MatchingCost::kCensus)
+    k_->censusCostRow(census_left_.data() + off, census_right_.data() + off, width_, d, ringPlane(s, row, i));
+  else
+    k_->sadCostRow(filt_left_.data() + off, filt_right_.data() + off, width_, d, ringPlane(s, row, i));
+}
+
+void DenseStereo::ensureCostRow(Stripe& s, int row) const {
+  int& held = s.ring_row[static_cast<std::size_t>(row % s.ring_size)];
+  if (held == row) return;
+  for (int i = 0; i < params_.numDisp(); ++i) computeCostPlane(s, row, i);
+  held = row;
 }
 
 void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
@@ -163,7 +175,6 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
   const int d0 = params_.min_disp;
   const int rh = params_.window_h / 2;
   const int rw = params_.window_w / 2;
-  const std::size_t plane_n = static_cast<std::size_t>(D) * static_cast<std::size_t>(cost_stride_);
   const double area = static_cast<double>(params_.window_w) * params_.window_h;
   const bool use_texture = params_.texture_threshold > 0.0f;
   const double texture_limit = static_cast<double>(params_.texture_threshold) * 2.0 * area;
@@ -183,38 +194,54 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
   };
 
   for (int y = s.y0; y < s.y1; ++y) {
-    // 1-2. Vertical running sum of the cost planes over rows [y - rh, y + rh] (clamped).
+    // 1-2. Vertical running sum of the cost planes over rows [y - rh, y + rh] (clamped),
+    // then per plane the horizontal box and the streaming winner-take-all (3).
+    const int new_row = clampRow(y + rh, height_);
+    const int old_row = clampRow(y - rh - 1, height_);
+    bool fresh_new = false;
     if (y == s.y0) {
-      std::memset(s.colsum.data(), 0, plane_n * sizeof(std::uint16_t));
+      std::memset(s.colsum.data(), 0, s.colsum.size() * sizeof(std::uint16_t));
       if (use_texture) std::fill(s.tex_col.begin(), s.tex_col.end(), 0u);
       for (int r = y - rh; r <= y + rh; ++r) {
-        k_->addSubRow(s.colsum.data(), costRow(s, clampRow(r, height_)), nullptr, plane_n);
-        if (use_texture) texAdd(clampRow(r, height_), 1);
+        const int rr = clampRow(r, height_);
+        ensureCostRow(s, rr);
+        for (int i = 0; i < D; ++i)
+          k_->addSubRow(s.colsum.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_) + kXo,
+                        ringPlane(s, rr, i), nullptr, static_cast<std::size_t>(W));
+        if (use_texture) texAdd(rr, 1);
       }
     } else {
-      const std::uint16_t* add = costRow(s, clampRow(y + rh, height_));
-      const std::uint16_t* sub = costRow(s, clampRow(y - rh - 1, height_));
-      k_->addSubRow(s.colsum.data(), add, sub, plane_n);
+      fresh_new = s.ring_row[static_cast<std::size_t>(new_row % s.ring_size)] != new_row;
       if (use_texture) {
-        texAdd(clampRow(y + rh, height_), 1);
-        texAdd(clampRow(y - rh - 1, height_), -1);
+        texAdd(new_row, 1);
+        texAdd(old_row, -1);
       }
     }
-    // Horizontal box per plane, borders replicated; then mark x < d as impossible.
-    for (int i = 0; i < D; ++i) {
-      std::uint16_t* col = s.colsum.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_);
-      std::fill(col + kXo - rw, col + kXo, col[kXo]);
-      std::fill(col + kXo + W, col + kXo + W + rw, col[kXo + W - 1]);
-      std::uint16_t* agg = s.agg.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(agg_stride_);
-      k_->boxRow(col + kXo - rw, W, params_.window_w, agg);
-      std::fill(agg, agg + std::min(W, d0 + i), kImpossible);
+    simd::wtaInitRow(s.state(), W);
+    // Planes go through the WTA in blocks of kPlaneBlock rows of s.agg (row 0 = previous plane).
+    std::fill(s.agg.data(), s.agg.data() + agg_stride_, kImpossible);
+    const simd::WtaRowState st = s.state();
+    for (int i0 = 0; i0 < D; i0 += kPlaneBlock) {
+      const int n = std::min(kPlaneBlock, D - i0);
+      for (int p = 0; p < n; ++p) {
+        const int i = i0 + p;
+        std::uint16_t* col = s.colsum.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_);
+        if (y != s.y0) {
+          if (fresh_new) computeCostPlane(s, new_row, i);
+          k_->addSubRow(col + kXo, ringPlane(s, new_row, i), ringPlane(s, old_row, i), static_cast<std::size_t>(W));
+        }
+        std::fill(col + kXo - rw, col + kXo, col[kXo]);
+        std::fill(col + kXo + W, col + kXo + W + rw, col[kXo + W - 1]);
+        std::uint16_t* agg = s.agg.data() + static_cast<std::size_t>(p + 1) * static_cast<std::size_t>(agg_stride_);
+        k_->boxRow(col + kXo - rw, W, params_.window_w, agg);
+        std::fill(agg, agg + std::min(W, d0 + i), kImpossible);  // x - d < 0: no match possible
+      }
+      k_->wtaUpdateRows(s.agg.data() + agg_stride_, agg_stride_, n, i0, W, d0, st);
+      // The last plane of this block is the "previous plane" of the next block.
+      std::memcpy(s.agg.data(), s.agg.data() + static_cast<std::size_t>(n) * static_cast<std::size_t>(agg_stride_),
+                  static_cast<std::size_t>(W) * sizeof(std::uint16_t));
     }
-    // 3. Winner-take-all (left), second best, right WTA.
-    k_->wtaLeftRow(s.agg.data(), agg_stride_, W, D, s.best_cost.data(), s.best_idx.data());
-    if (params_.uniqueness_pct > 0)
-      k_->secondBestRow(s.agg.data(), agg_stride_, W, D, s.best_idx.data(), s.second.data());
-    if (params_.lr_check)
-      k_->wtaRightRow(s.agg.data(), agg_stride_, W, d0, D, s.best_idx_r.data());
+    if (fresh_new) s.ring_row[static_cast<std::size_t>(new_row % s.ring_size)] = new_row;
     if (use_texture) {
       // Horizontal box of the texture column sums, borders replicated.
       std::uint32_t sum = 0;
@@ -235,13 +262,13 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       disp[x] = inf;
       sig[x] = inf;
       curv[x] = inf;
-      const int idx = s.best_idx[static_cast<std::size_t>(x)];
+      const int idx = s.bidx[static_cast<std::size_t>(x)];
       if (idx < 0) { ++s.stats.no_candidate; continue; }
       if (use_texture && static_cast<double>(s.tex_row[static_cast<std::size_t>(x)]) < texture_limit) {
         ++s.stats.low_texture;
         continue;
       }
-      const std::uint32_t best = s.best_cost[static_cast<std::size_t>(x)];
+      const std::uint32_t best = s.best[static_cast<std::size_t>(x)];
       if (params_.uniqueness_pct > 0) {
         const std::uint32_t second = s.second[static_cast<std::size_t>(x)];
         // No competitor at all (fewer than 3 candidates, at the left border) cannot be verified.
@@ -253,14 +280,14 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       }
       if (params_.lr_check) {
         const int xr = x - (d0 + idx);
-        const int idr = s.best_idx_r[static_cast<std::size_t>(xr)];
+        const int idr = s.idx_r[static_cast<std::size_t>(xr)];
         if (idr < 0 || std::abs(idr - idx) > params_.lr_max_diff) { ++s.stats.lr_inconsistent; continue; }
       }
       float delta = 0.0f;
       float kappa = 0.0f;
       if (idx > 0 && idx + 1 < D) {
-        const int cm = s.agg[static_cast<std::size_t>(idx - 1) * static_cast<std::size_t>(agg_stride_) + static_cast<std::size_t>(x)];
-        const int cp = s.agg[static_cast<std::size_t>(idx + 1) * static_cast<std::size_t>(agg_stride_) + static_cast<std::size_t>(x)];
+        const int cm = s.cm[static_cast<std::size_t>(x)];
+        const int cp = s.cp[static_cast<std::size_t>(x)];
         const int denom = cm + cp - 2 * static_cast<int>(best);
         if (cp != kImpossible && denom > 0) {
           if (params_.subpixel) delta = static_cast<float>(cm - cp) / static_cast<float>(2 * denom);

@@ -110,7 +110,9 @@ class DenseStereo {
   void padImage(ImageView<const std::uint8_t> src, ImageU8& dst, int y0, int y1) const;
   void prepareRows(int y0, int y1);  // census or prefilter rows of both images
   void matchRows(Stripe& s, DisparityResult& out);
-  const std::uint16_t* costRow(Stripe& s, int row);
+  std::uint8_t* ringPlane(Stripe& s, int row, int i) const;  // cost plane i of a row in the ring
+  void computeCostPlane(Stripe& s, int row, int i) const;
+  void ensureCostRow(Stripe& s, int row) const;  // all planes of a row present in the ring
 
   DenseStereoParams params_;
   Status init_status_;
@@ -120,7 +122,8 @@ class DenseStereo {
   int pad_y_ = 0;
   int right_pad_ = 0;  // left padding (elements) of right census / prefiltered rows
   std::ptrdiff_t cost_stride_ = 0;  // elements per disparity plane
-  std::ptrdiff_t agg_stride_ = 0;
+  std::ptrdiff_t ring_stride_ = 0;  // bytes per uint8 cost plane in the ring
+  std::ptrdiff_t agg_stride_ = 0;   // elements per aggregated-cost row
   const simd::StereoKernels* k_ = nullptr;
 
   ImageU8 padded_left_, padded_right_;
