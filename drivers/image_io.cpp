@@ -82,20 +82,23 @@ bool jpegLooksTruncated(const Bytes& b) {
   return last_eoi < last_sos || last_eoi < 0;
 }
 
+// `bytes` is the file's content, already read for sniffing. Decoding goes through cv::imread,
+// not cv::imdecode: OpenCV 4.6 decodes some formats (PFM, EXR) from a buffer via a temporary
+// file in /tmp that it leaks when decoding fails.
 Result<cv::Mat> decode(const Bytes& bytes, int flags, const std::string& path) {
+  if (jpegLooksTruncated(bytes)) {
+    return Status::corruptData("cannot decode image " + path +
+                               ": truncated JPEG (no end-of-image marker after the last scan)");
+  }
   cv::Mat m;
   try {
-    m = cv::imdecode(bytes, flags);
+    m = cv::imread(path, flags);
   } catch (const std::exception& e) {
     return Status::corruptData("cannot decode image " + path + ": " + e.what());
   }
   if (m.empty()) {
     return Status::corruptData("cannot decode image " + path +
                                " (not a format OpenCV reads, or truncated or corrupt)");
-  }
-  if (jpegLooksTruncated(bytes)) {
-    return Status::corruptData("cannot decode image " + path +
-                               ": truncated JPEG (no end-of-image marker after the last scan)");
   }
   return m;
 }

@@ -90,11 +90,19 @@ void censusCostRow(const std::uint64_t* left, const std::uint64_t* right, int wi
                    std::uint8_t* cost) {
   const std::uint64_t* r = right - d;
   int x = 0;
+  // 256-bit right loads (see boxRow); four popcount vectors packed to 16 bytes.
   for (; x + 16 <= width; x += 16) {
-    const __m512i a = _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(left + x), _mm512_loadu_si512(r + x)));
-    const __m512i b = _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(left + x + 8), _mm512_loadu_si512(r + x + 8)));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(cost + x),
-                     _mm_unpacklo_epi64(_mm512_cvtepi64_epi8(a), _mm512_cvtepi64_epi8(b)));
+    __m256i pc[4];
+    for (int q = 0; q < 4; ++q)
+      pc[q] = _mm256_popcnt_epi64(_mm256_xor_si256(
+          _mm256_loadu_si256(reinterpret_cast<const __m256i*>(left + x + 4 * q)),
+          _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + x + 4 * q))));
+    // Each 64-bit lane holds a count <= 64: pack 64 -> 32 -> 16 -> 8 bits keeping pixel order.
+    const __m512i all = _mm512_inserti64x4(_mm512_castsi256_si512(_mm256_or_si256(pc[0], _mm256_slli_epi64(pc[1], 32))),
+                                           _mm256_or_si256(pc[2], _mm256_slli_epi64(pc[3], 32)), 1);
+    // all (32-bit lanes): p0 p4 p1 p5 p2 p6 p3 p7 | p8 p12 p9 p13 p10 p14 p11 p15
+    const __m512i order = _mm512_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7, 8, 10, 12, 14, 9, 11, 13, 15);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(cost + x), _mm512_cvtepi32_epi8(_mm512_permutexvar_epi32(order, all)));
   }
   if (x < width) scalarKernels().censusCostRow(left + x, right + x, width - x, d, cost + x);
 }
@@ -122,13 +130,21 @@ void addSubRow(std::uint16_t* acc, const std::uint8_t* add, const std::uint8_t* 
   }
 }
 
+// 256-bit loads: a misaligned 512-bit load always splits across two cache lines, a 256-bit one
+// only every other time, and the sum is load-bound.
 void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
-  for (int x = 0; x < width; x += 32) {
-    const __mmask32 m = tailMask32(width - x);
-    __m512i s = _mm512_maskz_loadu_epi16(m, in + x);
-    for (int k = 1; k < win_w; ++k) s = _mm512_add_epi16(s, _mm512_maskz_loadu_epi16(m, in + x + k));
-    _mm512_mask_storeu_epi16(out + x, m, s);
+  int x = 0;
+  for (; x + 32 <= width; x += 32) {
+    __m256i s0 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in + x));
+    __m256i s1 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in + x + 16));
+    for (int k = 1; k < win_w; ++k) {
+      s0 = _mm256_add_epi16(s0, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in + x + k)));
+      s1 = _mm256_add_epi16(s1, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in + x + 16 + k)));
+    }
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x), s0);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x + 16), s1);
   }
+  if (x < width) scalarKernels().boxRow(in + x, width - x, win_w, out + x);
 }
 
 // The left-image state of 32 columns stays in registers across the planes of a block; updates

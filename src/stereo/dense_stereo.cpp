@@ -176,11 +176,12 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
   const int rh = params_.window_h / 2;
   const int rw = params_.window_w / 2;
   const double area = static_cast<double>(params_.window_w) * params_.window_h;
+  const float inv_area = static_cast<float>(1.0 / area);
   const bool use_texture = params_.texture_threshold > 0.0f;
   const double texture_limit = static_cast<double>(params_.texture_threshold) * 2.0 * area;
   const float inf = std::numeric_limits<float>::infinity();
   std::fill(s.ring_row.begin(), s.ring_row.end(), -1);
-  s.stats = DenseStereoStats{};
+  DenseStereoStats counts;  // local so the compiler keeps the counters in registers
 
   // Central-difference gradient |I(x+1) - I(x-1)| of left row r, for the texture filter.
   auto gradRow = [&](int r) {
@@ -263,9 +264,9 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       sig[x] = inf;
       curv[x] = inf;
       const int idx = s.bidx[static_cast<std::size_t>(x)];
-      if (idx < 0) { ++s.stats.no_candidate; continue; }
+      if (idx < 0) { ++counts.no_candidate; continue; }
       if (use_texture && static_cast<double>(s.tex_row[static_cast<std::size_t>(x)]) < texture_limit) {
-        ++s.stats.low_texture;
+        ++counts.low_texture;
         continue;
       }
       const std::uint32_t best = s.best[static_cast<std::size_t>(x)];
@@ -274,14 +275,14 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
         // No competitor at all (fewer than 3 candidates, at the left border) cannot be verified.
         if (second == kImpossible ||
             static_cast<std::uint64_t>(second) * 100u <= static_cast<std::uint64_t>(best) * (100u + static_cast<std::uint32_t>(params_.uniqueness_pct))) {
-          ++s.stats.not_unique;
+          ++counts.not_unique;
           continue;
         }
       }
       if (params_.lr_check) {
         const int xr = x - (d0 + idx);
         const int idr = s.idx_r[static_cast<std::size_t>(xr)];
-        if (idr < 0 || std::abs(idr - idx) > params_.lr_max_diff) { ++s.stats.lr_inconsistent; continue; }
+        if (idr < 0 || std::abs(idr - idx) > params_.lr_max_diff) { ++counts.lr_inconsistent; continue; }
       }
       float delta = 0.0f;
       float kappa = 0.0f;
@@ -291,15 +292,16 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
         const int denom = cm + cp - 2 * static_cast<int>(best);
         if (cp != kImpossible && denom > 0) {
           if (params_.subpixel) delta = static_cast<float>(cm - cp) / static_cast<float>(2 * denom);
-          kappa = static_cast<float>(denom / area);
+          kappa = static_cast<float>(denom) * inv_area;
         }
       }
       disp[x] = static_cast<float>(d0 + idx) + delta;
       sig[x] = params_.sigma_model.sigmaFor(kappa);
       curv[x] = kappa;
-      ++s.stats.valid;
+      ++counts.valid;
     }
   }
+  s.stats = counts;
 }
 
 Status DenseStereo::process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,

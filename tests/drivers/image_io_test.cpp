@@ -91,6 +91,7 @@ void expectSameBits(const ImageF32& a, const ImageF32& b) {
 
 TEST_F(ImageIoTest, PfmRoundTripIsExactAndStoresBottomRowFirst) {
   const ImageF32 img = sampleDisparity();
+  ASSERT_TRUE(writePfm(path("d.pfm"), ImageF32(2, 2).cview()).isOk());  // replaced below
   ASSERT_TRUE(writePfm(path("d.pfm"), img.cview()).isOk());
   EXPECT_EQ(tmpFiles(), 0);
   const std::vector<unsigned char> bytes = readBytes(path("d.pfm"));
@@ -198,13 +199,7 @@ TEST_F(ImageIoTest, DisparityPng16RoundTripKittiConvention) {
 }
 
 TEST_F(ImageIoTest, LoadDisparity8BitPngDividesByScale) {
-  cv::Mat m(2, 3, CV_8UC1);
-  m.at<std::uint8_t>(0, 0) = 0;
-  m.at<std::uint8_t>(0, 1) = 16;
-  m.at<std::uint8_t>(0, 2) = 255;
-  m.at<std::uint8_t>(1, 0) = 1;
-  m.at<std::uint8_t>(1, 1) = 8;
-  m.at<std::uint8_t>(1, 2) = 100;
+  const cv::Mat m = (cv::Mat_<std::uint8_t>(2, 3) << 0, 16, 255, 1, 8, 100);
   ASSERT_TRUE(cv::imwrite(path("g.png"), m));
   const Result<ImageF32> r = loadDisparity(path("g.png"), 4.0);
   ASSERT_TRUE(r.isOk()) << r.status().message();
@@ -232,15 +227,12 @@ TEST_F(ImageIoTest, LoadDisparityBadArguments) {
 
 // ---- grey images: bad inputs never crash ----
 
-TEST_F(ImageIoTest, LoadGreyMissingFileIsNotFoundNamingThePath) {
-  const Result<ImageU8> r = loadGrey(path("missing.png"));
-  ASSERT_FALSE(r.isOk());
-  EXPECT_EQ(r.status().code(), StatusCode::kNotFound);
-  EXPECT_NE(r.status().message().find("does not exist: " + path("missing.png")), std::string::npos)
-      << r.status().message();
-}
-
-TEST_F(ImageIoTest, LoadGreyGarbageEmptyAndDirectory) {
+TEST_F(ImageIoTest, LoadGreyMissingGarbageEmptyAndDirectory) {
+  const Result<ImageU8> missing = loadGrey(path("missing.png"));
+  EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
+  EXPECT_NE(missing.status().message().find("does not exist: " + path("missing.png")),
+            std::string::npos)
+      << missing.status().message();
   std::vector<unsigned char> garbage(4096);
   for (std::size_t i = 0; i < garbage.size(); ++i)
     garbage[i] = static_cast<unsigned char>(i * 131 + 7);
@@ -308,11 +300,7 @@ TEST_F(ImageIoTest, LoadGreyConvertsColourAndRefuses16Bit) {
 }
 
 TEST_F(ImageIoTest, LoadMaskKeepsOnlyWhite) {
-  cv::Mat m(1, 4, CV_8UC1);
-  m.at<std::uint8_t>(0, 0) = 0;
-  m.at<std::uint8_t>(0, 1) = 128;
-  m.at<std::uint8_t>(0, 2) = 255;
-  m.at<std::uint8_t>(0, 3) = 1;
+  const cv::Mat m = (cv::Mat_<std::uint8_t>(1, 4) << 0, 128, 255, 1);
   ASSERT_TRUE(cv::imwrite(path("m.png"), m));
   const Result<ImageU8> r = loadMask(path("m.png"));
   ASSERT_TRUE(r.isOk()) << r.status().message();
@@ -407,19 +395,6 @@ TEST_F(ImageIoTest, UnwritableDirectoryIsIoError) {
   EXPECT_EQ(s.code(), StatusCode::kIoError);
   EXPECT_NE(s.message().find(path("ro/d.pfm")), std::string::npos) << s.message();
   fs::permissions(path("ro"), fs::perms::owner_all);
-  EXPECT_EQ(tmpFiles(), 0);
-}
-
-TEST_F(ImageIoTest, WriteReplacesAnExistingFile) {
-  ImageF32 a(2, 2);
-  a.fill(1.0f);
-  ImageF32 b(3, 1);
-  b.fill(2.0f);
-  ASSERT_TRUE(writePfm(path("d.pfm"), a.cview()).isOk());
-  ASSERT_TRUE(writePfm(path("d.pfm"), b.cview()).isOk());
-  const Result<ImageF32> r = readPfm(path("d.pfm"));
-  ASSERT_TRUE(r.isOk());
-  expectSameBits(b, r.value());
   EXPECT_EQ(tmpFiles(), 0);
 }
 
