@@ -119,11 +119,11 @@ Result<double> ArgParser::getDouble(const std::string& name) const {
   return d;
 }
 
-Status ArgParser::getSize(const std::string& name, int& w, int& h) const {
+Status ArgParser::getSize(const std::string& name, int& w, int& h, bool require_odd) const {
   const std::string v = get(name);
   const auto x = v.find('x');
-  auto parse = [](const std::string& t, int& out) {
-    if (t.empty() || t.size() > 2) return false;
+  auto parse = [require_odd](const std::string& t, int& out) {
+    if (t.empty() || t.size() > (require_odd ? 2u : 4u)) return false;
     for (char c : t)
       if (c < '0' || c > '9') return false;
     out = std::stoi(t);
@@ -131,6 +131,10 @@ Status ArgParser::getSize(const std::string& name, int& w, int& h) const {
   };
   if (x == std::string::npos || !parse(v.substr(0, x), w) || !parse(v.substr(x + 1), h))
     return Status::invalidArgument("--" + name + ": '" + v + "' is not of the form WxH (e.g. 9x7)");
+  if (!require_odd) {
+    if (w < 1 || h < 1) return Status::invalidArgument("--" + name + ": sides must be >= 1, got " + v);
+    return Status::ok();
+  }
   if (w < 1 || h < 1 || w % 2 == 0 || h % 2 == 0)
     return Status::invalidArgument("--" + name + ": window sides must be odd and >= 1, got " + v);
   return Status::ok();

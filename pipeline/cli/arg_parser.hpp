@@ -33,8 +33,8 @@ class ArgParser {
   // Typed getters: an error names the option and the bad text.
   Result<int> getInt(const std::string& name, int min_value, int max_value) const;
   Result<double> getDouble(const std::string& name) const;
-  // "WxH" with odd W, H in [1, 99].
-  Status getSize(const std::string& name, int& w, int& h) const;
+  // "WxH" with W, H in [1, 99] (odd when require_odd), or up to 8192 when !require_odd.
+  Status getSize(const std::string& name, int& w, int& h, bool require_odd = true) const;
 
  private:
   struct Option {

@@ -1,5 +1,6 @@
 // svslam fit-sigma: calibrates the curvature -> sigma_d model of the dense stereo on ground truth
 // and checks it on held-apart cases.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -17,8 +18,10 @@ namespace svslam::cli {
 namespace {
 
 // Appends (kappa, |d - gt|) of every valid, evaluated pixel of one case.
+// At most max_per_case samples are kept per case (an even, deterministic subsampling), so that
+// one large image does not decide the fit alone.
 Status collectSamples(const std::string& dir, const std::string& mask_kind, const DenseStereoParams& params,
-                      Executor& ex, std::vector<float>& kappa, std::vector<float>& err) {
+                      Executor& ex, std::size_t max_per_case, std::vector<float>& kappa, std::vector<float>& err) {
   auto info = io::findStereoGtCase(dir, mask_kind, "");
   if (!info) return info.status();
   auto c = loadCase(*info, true, mask_kind == "nonocc");
@@ -27,15 +30,23 @@ Status collectSamples(const std::string& dir, const std::string& mask_kind, cons
   DenseStereoParams sp = params;
   sp.max_disp = info->max_disp;
   if (Status s = computeDisparity(*c, sp, ex, r, nullptr); !s) return Status(s.code(), info->name + ": " + s.message());
+  std::vector<float> k_case, e_case;
   for (int y = 0; y < c->gt.height(); ++y)
     for (int x = 0; x < c->gt.width(); ++x) {
       const float g = c->gt(x, y);
       const float d = r.disparity_px(x, y);
       if (!std::isfinite(g) || !(g > 0.0f) || !std::isfinite(d)) continue;
       if (!c->mask.empty() && c->mask(x, y) == 0) continue;
-      kappa.push_back(r.curvature(x, y));
-      err.push_back(std::abs(d - g));
+      k_case.push_back(r.curvature(x, y));
+      e_case.push_back(std::abs(d - g));
     }
+  const std::size_t n = k_case.size();
+  const std::size_t keep = std::min(n, max_per_case);
+  for (std::size_t j = 0; j < keep; ++j) {
+    const std::size_t idx = j * n / keep;
+    kappa.push_back(k_case[idx]);
+    err.push_back(e_case[idx]);
+  }
   return Status::ok();
 }
 
@@ -51,6 +62,7 @@ int runFitSigma(const std::vector<std::string>& args) {
   p.addOption("holdout", "DIR[,DIR...]", "held-apart case folders to check the fit on");
   p.addOption("mask-kind", "nonocc|all|disc", "evaluation mask of the cases", "nonocc");
   p.addOption("bins", "N", "number of curvature bins (2..200)", "16");
+  p.addOption("samples-per-case", "N", "at most N pixels per case, evenly subsampled (1000..10000000)", "100000");
   p.addOption("out", "FILE", "write the model (lines 'kappa sigma_px'), usable with --sigma-model");
   addStereoOptions(p);
   if (Status s = p.parse(args); !s) {
@@ -67,6 +79,9 @@ int runFitSigma(const std::vector<std::string>& args) {
   };
   auto bins = p.getInt("bins", 2, 200);
   if (!bins) return fail(bins.status());
+  auto per_case = p.getInt("samples-per-case", 1000, 10000000);
+  if (!per_case) return fail(per_case.status());
+  const auto cap = static_cast<std::size_t>(*per_case);
   auto params = stereoParamsFromArgs(p, 64);
   if (!params) return fail(params.status());
   auto threads = p.getInt("threads", 1, 64);
@@ -75,10 +90,10 @@ int runFitSigma(const std::vector<std::string>& args) {
 
   std::vector<float> k_train, e_train, k_hold, e_hold;
   for (const auto& dir : splitList(p.get("train")))
-    if (Status s = collectSamples(dir, p.get("mask-kind"), *params, ex, k_train, e_train); !s) return fail(s);
+    if (Status s = collectSamples(dir, p.get("mask-kind"), *params, ex, cap, k_train, e_train); !s) return fail(s);
   if (p.has("holdout"))
     for (const auto& dir : splitList(p.get("holdout")))
-      if (Status s = collectSamples(dir, p.get("mask-kind"), *params, ex, k_hold, e_hold); !s) return fail(s);
+      if (Status s = collectSamples(dir, p.get("mask-kind"), *params, ex, cap, k_hold, e_hold); !s) return fail(s);
   auto model = fitSigmaModel(k_train, e_train, *bins);
   if (!model) return fail(model.status());
   if (p.has("out")) {

@@ -21,7 +21,7 @@ struct SigmaModel {
   std::vector<float> curvature;  // kappa knots, strictly increasing
   std::vector<float> sigma_px;   // sigma_d at each knot, pixels, > 0, non-increasing
 
-  // The table fitted for census 9x7 with a 9x9 window on Middlebury v2 (see docs/stereo.md).
+  // The table fitted for census 9x7 with a 9x9 window on Middlebury (see docs/stereo.md).
   static SigmaModel defaultCensus();
 
   // sigma_d (px) for curvature kappa; kappa <= 0 or NaN gives the largest sigma.

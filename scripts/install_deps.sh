@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Installs what svslam needs to build and test on Debian 12 (run as root).
+set -euo pipefail
+export DEBIAN_FRONTEND=noninteractive
+APT="apt-get -o DPkg::Lock::Timeout=600 -y -q"
+packages=(build-essential cmake pkg-config git
+          libopencv-dev libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  $APT update
+  $APT install --no-install-recommends "${missing[@]}"
+fi
