@@ -1,0 +1,183 @@
+// The svslam executable end to end: outputs, JSON, and a clear error with a non-zero exit for
+// every kind of bad input (never a crash).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "drivers/image_io.hpp"
+#include "drivers/synthetic_pair.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("svslam_cli_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+    svslam::io::SyntheticPairParams p;
+    p.width = 160;
+    p.height = 120;
+    p.d_near_px = 20;
+    auto pair = svslam::io::makeSyntheticPair(p);
+    ASSERT_TRUE(pair.isOk());
+    writeGrey(path("l.png"), pair->left);
+    writeGrey(path("r.png"), pair->right);
+    ASSERT_TRUE(svslam::io::writePfm(path("gt.pfm"), pair->gt_disparity_px.cview()).isOk());
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  static void writeGrey(const std::string& p, const svslam::ImageU8& img) {
+    cv::Mat m(img.height(), img.width(), CV_8U, const_cast<std::uint8_t*>(img.row(0)), static_cast<std::size_t>(img.stride()));
+    ASSERT_TRUE(cv::imwrite(p, m));
+  }
+  CliRun run(const std::string& args) const {
+    CliRun r;
+    const std::string cmd = std::string(SVSLAM_CLI) + " " + args + " > " + path("stdout.txt") + " 2> " + path("stderr.txt");
+    const int status = std::system(cmd.c_str());
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.out = slurp(path("stdout.txt"));
+    r.err = slurp(path("stderr.txt"));
+    return r;
+  }
+  static std::string slurp(const std::string& p) {
+    std::ifstream f(p);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+  }
+  // A failing run: exit code 1 or 2 (not a crash), a message on stderr containing `needle`.
+  void expectError(const std::string& args, const std::string& needle) const {
+    const CliRun r = run(args);
+    EXPECT_TRUE(r.code == 1 || r.code == 2) << args << " exited " << r.code << "\n" << r.err;
+    EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\nstderr: " << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+  fs::path dir_;
+};
+
+TEST_F(Cli, DisparityWritesOutputsAndJson) {
+  const CliRun r = run("disparity --left " + path("l.png") + " --right " + path("r.png") +
+                    " --max-disp 32 --repeat 3 --out " + path("d.pfm") + " --sigma " + path("s.pfm") +
+                    " --color " + path("c.png"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* key : {"\"width\": 160", "\"height\": 120", "\"method\": \"census\"", "\"threads\": 1",
+                          "\"median_ms\"", "\"valid_fraction\""})
+    EXPECT_NE(r.out.find(key), std::string::npos) << key << " in " << r.out;
+  auto d = svslam::io::readPfm(path("d.pfm"));
+  ASSERT_TRUE(d.isOk());
+  int inf = 0;
+  for (int y = 0; y < d->height(); ++y)
+    for (int x = 0; x < d->width(); ++x) {
+      EXPECT_FALSE(std::isnan((*d)(x, y)));
+      inf += std::isinf((*d)(x, y));
+    }
+  EXPECT_GT(inf, 0);  // occlusions and the left border are invalid (+inf)
+  EXPECT_TRUE(fs::exists(path("s.pfm")));
+  EXPECT_TRUE(fs::exists(path("c.png")));
+  // KITTI png: uint16 = d * 256, 0 invalid; matches the pfm.
+  ASSERT_EQ(run("disparity --left " + path("l.png") + " --right " + path("r.png") + " --max-disp 32 --out " + path("d.png")).code, 0);
+  cv::Mat png = cv::imread(path("d.png"), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(png.type(), CV_16U);
+  for (int y = 0; y < png.rows; y += 7)
+    for (int x = 0; x < png.cols; x += 5) {
+      const float v = (*d)(x, y);
+      const int p = png.at<std::uint16_t>(y, x);
+      if (std::isinf(v)) EXPECT_EQ(p, 0);
+      else EXPECT_NEAR(p / 256.0, v, 1.0 / 256);
+    }
+  // Threads do not change the result.
+  ASSERT_EQ(run("disparity --left " + path("l.png") + " --right " + path("r.png") + " --max-disp 32 --threads 2 --out " + path("d2.pfm")).code, 0);
+  EXPECT_EQ(slurp(path("d.pfm")), slurp(path("d2.pfm")));
+}
+
+TEST_F(Cli, EvalDisparityScoresAgainstGroundTruth) {
+  const CliRun r = run("eval-disparity --gt " + path("gt.pfm") + " --left " + path("l.png") + " --right " + path("r.png") + " --max-disp 32");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* key : {"bad05_valid_pct", "bad1_valid_pct", "bad2_valid_pct", "bad3_valid_pct", "bad1_all_pct", "density_pct", "mae_valid_px"})
+    EXPECT_NE(r.out.find(key), std::string::npos) << key;
+  // Scoring the ground truth against itself: no error, full density.
+  const CliRun self = run("eval-disparity --gt " + path("gt.pfm") + " --disp " + path("gt.pfm"));
+  ASSERT_EQ(self.code, 0) << self.err;
+  EXPECT_NE(self.out.find("\"bad05_valid_pct\": 0.0000"), std::string::npos) << self.out;
+  EXPECT_NE(self.out.find("\"density_pct\": 100.0000"), std::string::npos) << self.out;
+}
+
+TEST_F(Cli, BuiltInSyntheticSourceRunsWithoutData) {
+  const CliRun r = run("disparity --synthetic-size 200x150");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"source\": \"synthetic\""), std::string::npos);
+}
+
+TEST_F(Cli, HelpExplainsEveryCommand) {
+  EXPECT_EQ(run("--help").code, 0);
+  for (const char* c : {"disparity", "eval-disparity", "fit-sigma"}) {
+    const CliRun r = run(std::string(c) + " --help");
+    EXPECT_EQ(r.code, 0) << c;
+    EXPECT_NE(r.out.find("--threads"), std::string::npos) << c;
+  }
+  const CliRun d = run("disparity --help");
+  for (const char* o : {"--left", "--right", "--max-disp", "--min-disp", "--method", "--window", "--threads", "--repeat", "--out", "--sigma", "--color"})
+    EXPECT_NE(d.out.find(o), std::string::npos) << o;
+}
+
+TEST_F(Cli, BadInputsGiveClearErrors) {
+  const std::string pair = " --left " + path("l.png") + " --right " + path("r.png");
+  expectError("disparity --left " + path("missing.png") + " --right " + path("r.png") + " --max-disp 16", "missing.png");
+  expectError("disparity" + pair + " --max-disp 0", "--max-disp");
+  expectError("disparity" + pair + " --max-disp 160", "max_disp");
+  expectError("disparity" + pair + " --max-disp 16 --method ssd", "unknown method");
+  expectError("disparity" + pair + " --max-disp 16 --window 4x4", "odd");
+  expectError("disparity" + pair + " --max-disp 16 --census 9x9", "64 neighbours");
+  expectError("disparity" + pair + " --max-disp 16 --bogus 1", "unknown option --bogus");
+  expectError("disparity" + pair + " --max-disp abc", "not an integer");
+  expectError("disparity" + pair + " --max-disp 16 --out " + path("d.txt"), ".pfm or .png");
+  expectError("disparity --left " + path("l.png") + " --max-disp 16", "both --left and --right");
+  expectError("frobnicate", "unknown command");
+  // Left and right of different sizes.
+  svslam::ImageU8 small(100, 120);
+  writeGrey(path("small.png"), small);
+  expectError("disparity --left " + path("l.png") + " --right " + path("small.png") + " --max-disp 16", "differ in size");
+  // Empty, garbage and truncated files.
+  { std::ofstream(path("empty.png")); }
+  expectError("disparity --left " + path("empty.png") + " --right " + path("r.png") + " --max-disp 16", "empty.png");
+  { std::ofstream(path("garbage.png")) << "this is not an image"; }
+  expectError("disparity --left " + path("garbage.png") + " --right " + path("r.png") + " --max-disp 16", "garbage.png");
+  const std::string png = slurp(path("l.png"));
+  { std::ofstream(path("trunc.png"), std::ios::binary) << png.substr(0, png.size() / 2); }
+  expectError("disparity --left " + path("trunc.png") + " --right " + path("r.png") + " --max-disp 16", "trunc.png");
+  // Output folder that does not exist: error naming the path; nothing half-written.
+  expectError("disparity" + pair + " --max-disp 16 --out " + path("no/such/dir/d.pfm"), "d.pfm");
+  expectError("eval-disparity --gt " + path("missing.pfm") + " --disp " + path("gt.pfm"), "missing.pfm");
+  expectError("eval-disparity --dataset " + path("nowhere"), "nowhere");
+}
+
+TEST_F(Cli, ColourInputIsConvertedToGrey) {
+  cv::Mat l = cv::imread(path("l.png"), cv::IMREAD_GRAYSCALE), lc;
+  cv::cvtColor(l, lc, cv::COLOR_GRAY2BGR);
+  ASSERT_TRUE(cv::imwrite(path("lc.png"), lc));
+  ASSERT_EQ(run("disparity --left " + path("lc.png") + " --right " + path("r.png") + " --max-disp 32 --out " + path("a.pfm")).code, 0);
+  ASSERT_EQ(run("disparity --left " + path("l.png") + " --right " + path("r.png") + " --max-disp 32 --out " + path("b.pfm")).code, 0);
+  EXPECT_EQ(slurp(path("a.pfm")), slurp(path("b.pfm")));
+}
+
+}  // namespace
