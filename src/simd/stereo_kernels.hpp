@@ -5,8 +5,8 @@
 // them to it on odd sizes and strides. Layout conventions shared by all kernels:
 // - census words: pixel x of a row is one uint64; offset k of the census window (row-major
 //   over the window, the centre skipped) is bit (63 - k), set when neighbour < centre.
-// - cost rows are "planes": cost[i * stride + x] is the cost of disparity d0 + i at pixel x,
-//   uint16; i in [0, num_disp).
+// - a cost plane is one uint8 row: cost[x] for one disparity d; aggregated costs are uint16 and
+//   0xFFFF marks "no match possible" (x - d < 0).
 #include <cstddef>
 #include <cstdint>
 
@@ -60,6 +60,7 @@ struct StereoKernels {
                     std::size_t n);
 
   // Horizontal box sum: out[x] = sum_{k=0}^{win_w-1} in[x + k] for x in [0, width) (mod 2^16).
+  // Precondition: in is readable at [0, width + win_w - 1).
   void (*boxRow)(const std::uint16_t* in, int width, int win_w, std::uint16_t* out);
 
   // Adds planes i0 .. i0 + n_planes - 1 to the streaming WTA state. Plane i0 + p is the row

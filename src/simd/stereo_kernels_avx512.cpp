@@ -9,77 +9,63 @@
 namespace svslam::simd {
 namespace {
 
-// 8 byte planes (plane j = census bits 8j..8j+7, MSB first) -> 64 census words at out[0..64).
-// Word byte 7 - j (little endian) is plane j.
-inline void transposeStore(const __m512i p[8], std::uint64_t* out) {
-  const __m512i t0 = _mm512_unpacklo_epi8(p[7], p[6]);
-  const __m512i t1 = _mm512_unpackhi_epi8(p[7], p[6]);
-  const __m512i t2 = _mm512_unpacklo_epi8(p[5], p[4]);
-  const __m512i t3 = _mm512_unpackhi_epi8(p[5], p[4]);
-  const __m512i t4 = _mm512_unpacklo_epi8(p[3], p[2]);
-  const __m512i t5 = _mm512_unpackhi_epi8(p[3], p[2]);
-  const __m512i t6 = _mm512_unpacklo_epi8(p[1], p[0]);
-  const __m512i t7 = _mm512_unpackhi_epi8(p[1], p[0]);
-  const __m512i u0 = _mm512_unpacklo_epi16(t0, t2);  // pixels 0..3 of each 128-bit lane
-  const __m512i u1 = _mm512_unpackhi_epi16(t0, t2);  // 4..7
-  const __m512i u2 = _mm512_unpacklo_epi16(t1, t3);  // 8..11
-  const __m512i u3 = _mm512_unpackhi_epi16(t1, t3);  // 12..15
-  const __m512i u4 = _mm512_unpacklo_epi16(t4, t6);
-  const __m512i u5 = _mm512_unpackhi_epi16(t4, t6);
-  const __m512i u6 = _mm512_unpacklo_epi16(t5, t7);
-  const __m512i u7 = _mm512_unpackhi_epi16(t5, t7);
-  __m512i w[8];
-  w[0] = _mm512_unpacklo_epi32(u0, u4);  // pixels 0,1 of each lane
-  w[1] = _mm512_unpackhi_epi32(u0, u4);  // 2,3
-  w[2] = _mm512_unpacklo_epi32(u1, u5);  // 4,5
-  w[3] = _mm512_unpackhi_epi32(u1, u5);  // 6,7
-  w[4] = _mm512_unpacklo_epi32(u2, u6);  // 8,9
-  w[5] = _mm512_unpackhi_epi32(u2, u6);  // 10,11
-  w[6] = _mm512_unpacklo_epi32(u3, u7);  // 12,13
-  w[7] = _mm512_unpackhi_epi32(u3, u7);  // 14,15
-  // Lane L of w[m] holds pixels 16 L + 2 m, 16 L + 2 m + 1: gather lanes into pixel order.
-  for (int h = 0; h < 2; ++h) {  // h = 0: pixels 0..7 of each lane; h = 1: pixels 8..15
-    const __m512i* q = w + 4 * h;
-    const __m512i a_lo = _mm512_shuffle_i64x2(q[0], q[1], _MM_SHUFFLE(1, 0, 1, 0));
-    const __m512i b_lo = _mm512_shuffle_i64x2(q[2], q[3], _MM_SHUFFLE(1, 0, 1, 0));
-    const __m512i a_hi = _mm512_shuffle_i64x2(q[0], q[1], _MM_SHUFFLE(3, 2, 3, 2));
-    const __m512i b_hi = _mm512_shuffle_i64x2(q[2], q[3], _MM_SHUFFLE(3, 2, 3, 2));
-    _mm512_storeu_si512(out + 0 + 8 * h, _mm512_shuffle_i64x2(a_lo, b_lo, _MM_SHUFFLE(2, 0, 2, 0)));
-    _mm512_storeu_si512(out + 16 + 8 * h, _mm512_shuffle_i64x2(a_lo, b_lo, _MM_SHUFFLE(3, 1, 3, 1)));
-    _mm512_storeu_si512(out + 32 + 8 * h, _mm512_shuffle_i64x2(a_hi, b_hi, _MM_SHUFFLE(2, 0, 2, 0)));
-    _mm512_storeu_si512(out + 48 + 8 * h, _mm512_shuffle_i64x2(a_hi, b_hi, _MM_SHUFFLE(3, 1, 3, 1)));
+// Census words from 8 byte planes: plane j holds census bits 8j..8j+7 (MSB first) of each pixel
+// and becomes byte 7 - j (little endian) of the pixel's word.
+// 8 byte planes of 32 pixels (256-bit) -> 32 census words at out[0..32).
+inline void transposeStore256(const __m256i p[8], std::uint64_t* out) {
+  const __m256i t0 = _mm256_unpacklo_epi8(p[7], p[6]), t1 = _mm256_unpackhi_epi8(p[7], p[6]);
+  const __m256i t2 = _mm256_unpacklo_epi8(p[5], p[4]), t3 = _mm256_unpackhi_epi8(p[5], p[4]);
+  const __m256i t4 = _mm256_unpacklo_epi8(p[3], p[2]), t5 = _mm256_unpackhi_epi8(p[3], p[2]);
+  const __m256i t6 = _mm256_unpacklo_epi8(p[1], p[0]), t7 = _mm256_unpackhi_epi8(p[1], p[0]);
+  const __m256i u0 = _mm256_unpacklo_epi16(t0, t2), u1 = _mm256_unpackhi_epi16(t0, t2);
+  const __m256i u2 = _mm256_unpacklo_epi16(t1, t3), u3 = _mm256_unpackhi_epi16(t1, t3);
+  const __m256i u4 = _mm256_unpacklo_epi16(t4, t6), u5 = _mm256_unpackhi_epi16(t4, t6);
+  const __m256i u6 = _mm256_unpacklo_epi16(t5, t7), u7 = _mm256_unpackhi_epi16(t5, t7);
+  __m256i w[8];
+  w[0] = _mm256_unpacklo_epi32(u0, u4);  // pixels 0,1 | 16,17
+  w[1] = _mm256_unpackhi_epi32(u0, u4);  // 2,3 | 18,19
+  w[2] = _mm256_unpacklo_epi32(u1, u5);
+  w[3] = _mm256_unpackhi_epi32(u1, u5);
+  w[4] = _mm256_unpacklo_epi32(u2, u6);
+  w[5] = _mm256_unpackhi_epi32(u2, u6);
+  w[6] = _mm256_unpacklo_epi32(u3, u7);
+  w[7] = _mm256_unpackhi_epi32(u3, u7);
+  for (int m = 0; m < 8; m += 2) {
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + 2 * m), _mm256_permute2x128_si256(w[m], w[m + 1], 0x20));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + 16 + 2 * m), _mm256_permute2x128_si256(w[m], w[m + 1], 0x31));
   }
 }
 
+// 256-bit steps: the 62 window loads are misaligned, and a misaligned 512-bit load always
+// splits across cache lines.
 void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w, int win_h,
                std::uint64_t* out) {
   const int cx = win_w / 2;
   const int cy = win_h / 2;
   const int n_off = win_w * win_h - 1;
-  const __m512i one = _mm512_set1_epi8(1);
+  const __m256i one = _mm256_set1_epi8(1);
   int x = 0;
-  for (; x + 64 <= width; x += 64) {
-    const __m512i c = _mm512_loadu_si512(win + cy * stride + cx + x);
-    __m512i planes[8];
-    for (auto& pl : planes) pl = _mm512_setzero_si512();
+  for (; x + 32 <= width; x += 32) {
+    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(win + cy * stride + cx + x));
+    __m256i planes[8];
+    for (auto& pl : planes) pl = _mm256_setzero_si256();
     int k = 0;
     for (int dy = 0; dy < win_h; ++dy) {
       const std::uint8_t* r = win + dy * stride + x;
       for (int dx = 0; dx < win_w; ++dx) {
         if (dy == cy && dx == cx) continue;
-        const __mmask64 m = _mm512_cmplt_epu8_mask(_mm512_loadu_si512(r + dx), c);
-        __m512i& pl = planes[k >> 3];
-        pl = _mm512_add_epi8(pl, pl);
-        pl = _mm512_mask_add_epi8(pl, m, pl, one);
+        const __mmask32 m = _mm256_cmplt_epu8_mask(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + dx)), c);
+        __m256i& pl = planes[k >> 3];
+        pl = _mm256_mask_add_epi8(_mm256_add_epi8(pl, pl), m, _mm256_add_epi8(pl, pl), one);
         ++k;
       }
     }
     // A partial last plane still puts offset k at bit 63 - k: shift it up to the MSB.
     if (n_off % 8 != 0) {
-      __m512i& pl = planes[n_off >> 3];
-      for (int s = n_off % 8; s < 8; ++s) pl = _mm512_add_epi8(pl, pl);
+      __m256i& pl = planes[n_off >> 3];
+      for (int s = n_off % 8; s < 8; ++s) pl = _mm256_add_epi8(pl, pl);
     }
-    transposeStore(planes, out + x);
+    transposeStore256(planes, out + x);
   }
   if (x < width) scalarKernels().censusRow(win + x, stride, width - x, win_w, win_h, out + x);
 }

@@ -1,0 +1,302 @@
+// AVX2 backend of the stereo row kernels: 32 pixels per step for census and SAD, 16 uint16
+// lanes per step elsewhere, scalar tails. Bit-exact with stereo_kernels_scalar.cpp.
+#include <immintrin.h>
+
+#include <cstdlib>
+
+#include "simd/stereo_kernels.hpp"
+
+namespace svslam::simd {
+namespace {
+
+inline __m256i loadu(const void* p) { return _mm256_loadu_si256(static_cast<const __m256i*>(p)); }
+inline void storeu(void* p, __m256i v) { _mm256_storeu_si256(static_cast<__m256i*>(p), v); }
+
+// Census word of pixel x, as in the scalar reference (used for the tail).
+std::uint64_t censusPixel(const std::uint8_t* win, std::ptrdiff_t stride, int x, int win_w,
+                          int win_h) {
+  const int cx = win_w / 2;
+  const int cy = win_h / 2;
+  const std::uint8_t c = win[cy * stride + cx + x];
+  std::uint64_t word = 0;
+  int k = 0;
+  for (int dy = 0; dy < win_h; ++dy) {
+    const std::uint8_t* r = win + dy * stride + x;
+    for (int dx = 0; dx < win_w; ++dx) {
+      if (dy == cy && dx == cx) continue;
+      if (r[dx] < c) word |= std::uint64_t{1} << (63 - k);
+      ++k;
+    }
+  }
+  return word;
+}
+
+// Byte plane j holds census offsets 8j..8j+7 of 32 pixels, MSB first; it is byte 7 - j of each
+// pixel's word. Transposes the planes into 32 words: unpack 8 -> 16 -> 32 bits within lanes
+// (pixels p and p + 16 share a lane position), then join the lanes.
+inline void transposeStore(const __m256i* pl, std::uint64_t* out) {
+  const __m256i a = _mm256_unpacklo_epi8(pl[7], pl[6]);  // pixels 0-7 | 16-23
+  const __m256i b = _mm256_unpackhi_epi8(pl[7], pl[6]);  // pixels 8-15 | 24-31
+  const __m256i c = _mm256_unpacklo_epi8(pl[5], pl[4]);
+  const __m256i d = _mm256_unpackhi_epi8(pl[5], pl[4]);
+  const __m256i e = _mm256_unpacklo_epi8(pl[3], pl[2]);
+  const __m256i f = _mm256_unpackhi_epi8(pl[3], pl[2]);
+  const __m256i g = _mm256_unpacklo_epi8(pl[1], pl[0]);
+  const __m256i h = _mm256_unpackhi_epi8(pl[1], pl[0]);
+  const __m256i ac_lo = _mm256_unpacklo_epi16(a, c);  // pixels 0-3 | 16-19, bytes 0-3 of words
+  const __m256i ac_hi = _mm256_unpackhi_epi16(a, c);  // 4-7 | 20-23
+  const __m256i eg_lo = _mm256_unpacklo_epi16(e, g);  // bytes 4-7 of words
+  const __m256i eg_hi = _mm256_unpackhi_epi16(e, g);
+  const __m256i bd_lo = _mm256_unpacklo_epi16(b, d);  // 8-11 | 24-27
+  const __m256i bd_hi = _mm256_unpackhi_epi16(b, d);  // 12-15 | 28-31
+  const __m256i fh_lo = _mm256_unpacklo_epi16(f, h);
+  const __m256i fh_hi = _mm256_unpackhi_epi16(f, h);
+  const __m256i w0 = _mm256_unpacklo_epi32(ac_lo, eg_lo);  // 0,1 | 16,17
+  const __m256i w1 = _mm256_unpackhi_epi32(ac_lo, eg_lo);  // 2,3 | 18,19
+  const __m256i w2 = _mm256_unpacklo_epi32(ac_hi, eg_hi);  // 4,5 | 20,21
+  const __m256i w3 = _mm256_unpackhi_epi32(ac_hi, eg_hi);  // 6,7 | 22,23
+  const __m256i w4 = _mm256_unpacklo_epi32(bd_lo, fh_lo);  // 8,9 | 24,25
+  const __m256i w5 = _mm256_unpackhi_epi32(bd_lo, fh_lo);  // 10,11 | 26,27
+  const __m256i w6 = _mm256_unpacklo_epi32(bd_hi, fh_hi);  // 12,13 | 28,29
+  const __m256i w7 = _mm256_unpackhi_epi32(bd_hi, fh_hi);  // 14,15 | 30,31
+  storeu(out + 0, _mm256_permute2x128_si256(w0, w1, 0x20));
+  storeu(out + 4, _mm256_permute2x128_si256(w2, w3, 0x20));
+  storeu(out + 8, _mm256_permute2x128_si256(w4, w5, 0x20));
+  storeu(out + 12, _mm256_permute2x128_si256(w6, w7, 0x20));
+  storeu(out + 16, _mm256_permute2x128_si256(w0, w1, 0x31));
+  storeu(out + 20, _mm256_permute2x128_si256(w2, w3, 0x31));
+  storeu(out + 24, _mm256_permute2x128_si256(w4, w5, 0x31));
+  storeu(out + 28, _mm256_permute2x128_si256(w6, w7, 0x31));
+}
+
+void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w, int win_h,
+               std::uint64_t* out) {
+  const int cx = win_w / 2;
+  const int cy = win_h / 2;
+  const __m256i bias = _mm256_set1_epi8(static_cast<char>(0x80));
+  int x = 0;
+  for (; x + 32 <= width; x += 32) {
+    // Unsigned a < b as signed compare of (a ^ 0x80) and (b ^ 0x80).
+    const __m256i c = _mm256_xor_si256(loadu(win + cy * stride + cx + x), bias);
+    __m256i planes[8];
+    for (__m256i& p : planes) p = _mm256_setzero_si256();
+    __m256i acc = _mm256_setzero_si256();
+    int k = 0;
+    for (int dy = 0; dy < win_h; ++dy) {
+      const std::uint8_t* r = win + dy * stride + x;
+      for (int dx = 0; dx < win_w; ++dx) {
+        if (dy == cy && dx == cx) continue;
+        const __m256i lt = _mm256_cmpgt_epi8(c, _mm256_xor_si256(loadu(r + dx), bias));
+        acc = _mm256_sub_epi8(_mm256_add_epi8(acc, acc), lt);  // acc = acc << 1 | (nb < c)
+        if ((++k & 7) == 0) {
+          planes[(k >> 3) - 1] = acc;
+          acc = _mm256_setzero_si256();
+        }
+      }
+    }
+    if ((k & 7) != 0) {  // partial last plane: move its first offset up to bit 7
+      for (int s = k & 7; s < 8; ++s) acc = _mm256_add_epi8(acc, acc);
+      planes[k >> 3] = acc;
+    }
+    transposeStore(planes, out + x);
+  }
+  for (; x < width; ++x) out[x] = censusPixel(win, stride, x, win_w, win_h);
+}
+
+// Population count of each 64-bit element (in its low 16 bits, the rest zero).
+inline __m256i popcount64(__m256i v) {
+  const __m256i lut = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4,  //
+                                       0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
+  const __m256i nibble = _mm256_set1_epi8(0x0F);
+  const __m256i lo = _mm256_and_si256(v, nibble);
+  const __m256i hi = _mm256_and_si256(_mm256_srli_epi16(v, 4), nibble);
+  const __m256i bytes = _mm256_add_epi8(_mm256_shuffle_epi8(lut, lo), _mm256_shuffle_epi8(lut, hi));
+  return _mm256_sad_epu8(bytes, _mm256_setzero_si256());
+}
+
+void censusCostRow(const std::uint64_t* left, const std::uint64_t* right, int width, int d,
+                   std::uint8_t* cost) {
+  const std::uint64_t* r = right - d;
+  const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+  int x = 0;
+  for (; x + 16 <= width; x += 16) {
+    const __m256i p0 = popcount64(_mm256_xor_si256(loadu(left + x), loadu(r + x)));
+    const __m256i p1 = popcount64(_mm256_xor_si256(loadu(left + x + 4), loadu(r + x + 4)));
+    const __m256i p2 = popcount64(_mm256_xor_si256(loadu(left + x + 8), loadu(r + x + 8)));
+    const __m256i p3 = popcount64(_mm256_xor_si256(loadu(left + x + 12), loadu(r + x + 12)));
+    // 16-bit lanes after two packs: 0,1,4,5,8,9,12,13 | 2,3,6,7,10,11,14,15; the permute puts
+    // them in pixel order, the last pack narrows them to bytes.
+    const __m256i q = _mm256_permutevar8x32_epi32(
+        _mm256_packus_epi32(_mm256_packus_epi32(p0, p1), _mm256_packus_epi32(p2, p3)), order);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(cost + x),
+                     _mm_packus_epi16(_mm256_castsi256_si128(q), _mm256_extracti128_si256(q, 1)));
+  }
+  for (; x < width; ++x) cost[x] = static_cast<std::uint8_t>(_mm_popcnt_u64(left[x] ^ r[x]));
+}
+
+void sadCostRow(const std::uint8_t* left, const std::uint8_t* right, int width, int d,
+                std::uint8_t* cost) {
+  const std::uint8_t* r = right - d;
+  int x = 0;
+  for (; x + 32 <= width; x += 32) {
+    const __m256i a = loadu(left + x);
+    const __m256i b = loadu(r + x);
+    storeu(cost + x, _mm256_or_si256(_mm256_subs_epu8(a, b), _mm256_subs_epu8(b, a)));
+  }
+  if (x + 16 <= width) {
+    const __m128i a = _mm_loadu_si128(reinterpret_cast<const __m128i*>(left + x));
+    const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(r + x));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(cost + x),
+                     _mm_or_si128(_mm_subs_epu8(a, b), _mm_subs_epu8(b, a)));
+    x += 16;
+  }
+  for (; x < width; ++x) cost[x] = static_cast<std::uint8_t>(std::abs(left[x] - r[x]));
+}
+
+inline __m256i loadU8AsU16(const std::uint8_t* p) {
+  return _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)));
+}
+
+void addSubRow(std::uint16_t* acc, const std::uint8_t* add, const std::uint8_t* sub,
+               std::size_t n) {
+  std::size_t j = 0;
+  if (sub == nullptr) {
+    for (; j + 16 <= n; j += 16)
+      storeu(acc + j, _mm256_add_epi16(loadu(acc + j), loadU8AsU16(add + j)));
+    for (; j < n; ++j) acc[j] = static_cast<std::uint16_t>(acc[j] + add[j]);
+  } else {
+    for (; j + 16 <= n; j += 16) {
+      const __m256i s = _mm256_add_epi16(loadu(acc + j), loadU8AsU16(add + j));
+      storeu(acc + j, _mm256_sub_epi16(s, loadU8AsU16(sub + j)));
+    }
+    for (; j < n; ++j) acc[j] = static_cast<std::uint16_t>(acc[j] + add[j] - sub[j]);
+  }
+}
+
+void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
+  int x = 0;
+  for (; x + 16 <= width; x += 16) {
+    __m256i s0 = _mm256_setzero_si256();
+    __m256i s1 = _mm256_setzero_si256();
+    int k = 0;
+    for (; k + 2 <= win_w; k += 2) {
+      s0 = _mm256_add_epi16(s0, loadu(in + x + k));
+      s1 = _mm256_add_epi16(s1, loadu(in + x + k + 1));
+    }
+    if (k < win_w) s0 = _mm256_add_epi16(s0, loadu(in + x + k));
+    storeu(out + x, _mm256_add_epi16(s0, s1));
+  }
+  for (; x < width; ++x) {
+    std::uint16_t s = 0;
+    for (int k = 0; k < win_w; ++k) s = static_cast<std::uint16_t>(s + in[x + k]);
+    out[x] = s;
+  }
+}
+
+// Left-image part of the scalar reference on columns [x0, width) (tail of the vector body).
+void wtaLeftTail(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int x0,
+                 int width, const WtaRowState& s) {
+  for (int p = 0; p < n_planes; ++p) {
+    const int i = i0 + p;
+    const std::uint16_t* a = agg + p * stride;
+    const std::uint16_t* prev = a - stride;
+    for (int x = x0; x < width; ++x) {
+      const std::uint16_t c = a[x];
+      if (c < s.best[x]) {
+        s.second[x] = s.pm2[x];
+        s.best[x] = c;
+        s.bidx[x] = static_cast<std::int16_t>(i);
+        s.cm[x] = prev[x];
+        s.cp[x] = 0xFFFF;
+      } else if (i == s.bidx[x] + 1) {
+        s.cp[x] = c;
+      } else if (c < s.second[x]) {
+        s.second[x] = c;
+      }
+      s.pm2[x] = s.pm1[x];
+      if (c < s.pm1[x]) s.pm1[x] = c;
+    }
+  }
+}
+
+// The left state of 16 columns stays in registers across the planes; the branches of the
+// reference become blends. Compared values (best, second, pm1, pm2, costs) are held biased by
+// xor 0x8000 so that signed compares order them as uint16.
+void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int width,
+                   int d0, const WtaRowState& s) {
+  const __m256i sign = _mm256_set1_epi16(static_cast<short>(0x8000));
+  const __m256i ones = _mm256_set1_epi16(-1);
+  int x = 0;
+  for (; x + 16 <= width; x += 16) {
+    __m256i best = _mm256_xor_si256(loadu(s.best + x), sign);
+    __m256i second = _mm256_xor_si256(loadu(s.second + x), sign);
+    __m256i pm1 = _mm256_xor_si256(loadu(s.pm1 + x), sign);
+    __m256i pm2 = _mm256_xor_si256(loadu(s.pm2 + x), sign);
+    __m256i bidx = loadu(s.bidx + x);
+    __m256i cm = loadu(s.cm + x);
+    __m256i cp = loadu(s.cp + x);
+    __m256i prev = loadu(agg - stride + x);
+    for (int p = 0; p < n_planes; ++p) {
+      const int i = i0 + p;
+      const __m256i c = loadu(agg + p * stride + x);
+      const __m256i cb = _mm256_xor_si256(c, sign);
+      const __m256i m_new = _mm256_cmpgt_epi16(best, cb);  // c < best
+      // i == bidx + 1, as int: no int16 bidx matches when i - 1 > 32767.
+      const __m256i eq_adj =
+          i - 1 > 32767 ? _mm256_setzero_si256()
+                        : _mm256_cmpeq_epi16(bidx, _mm256_set1_epi16(static_cast<short>(i - 1)));
+      const __m256i m_adj = _mm256_andnot_si256(m_new, eq_adj);
+      const __m256i m_sec =
+          _mm256_andnot_si256(_mm256_or_si256(m_new, m_adj), _mm256_cmpgt_epi16(second, cb));
+      second = _mm256_blendv_epi8(_mm256_blendv_epi8(second, pm2, m_new), cb, m_sec);
+      best = _mm256_min_epi16(best, cb);
+      bidx = _mm256_blendv_epi8(bidx, _mm256_set1_epi16(static_cast<short>(i)), m_new);
+      cm = _mm256_blendv_epi8(cm, prev, m_new);
+      cp = _mm256_blendv_epi8(_mm256_blendv_epi8(cp, ones, m_new), c, m_adj);
+      pm2 = pm1;
+      pm1 = _mm256_min_epi16(pm1, cb);
+      prev = c;
+    }
+    storeu(s.best + x, _mm256_xor_si256(best, sign));
+    storeu(s.second + x, _mm256_xor_si256(second, sign));
+    storeu(s.pm1 + x, _mm256_xor_si256(pm1, sign));
+    storeu(s.pm2 + x, _mm256_xor_si256(pm2, sign));
+    storeu(s.bidx + x, bidx);
+    storeu(s.cm + x, cm);
+    storeu(s.cp + x, cp);
+  }
+  if (x < width) wtaLeftTail(agg, stride, n_planes, i0, x, width, s);
+
+  // Right image: plane i's candidate for right pixel xr is agg_i[xr + d0 + i].
+  for (int p = 0; p < n_planes; ++p) {
+    const int i = i0 + p;
+    const int n_right = width - (d0 + i);
+    if (n_right <= 0) continue;
+    const std::uint16_t* a = agg + p * stride + (d0 + i);
+    const __m256i vi = _mm256_set1_epi16(static_cast<short>(i));
+    int xr = 0;
+    for (; xr + 16 <= n_right; xr += 16) {
+      const __m256i c = loadu(a + xr);
+      const __m256i br = loadu(s.best_r + xr);
+      const __m256i lt = _mm256_cmpgt_epi16(_mm256_xor_si256(br, sign), _mm256_xor_si256(c, sign));
+      storeu(s.best_r + xr, _mm256_blendv_epi8(br, c, lt));
+      storeu(s.idx_r + xr, _mm256_blendv_epi8(loadu(s.idx_r + xr), vi, lt));
+    }
+    for (; xr < n_right; ++xr) {
+      if (a[xr] < s.best_r[xr]) {
+        s.best_r[xr] = a[xr];
+        s.idx_r[xr] = static_cast<std::int16_t>(i);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+const StereoKernels& avx2Kernels() {
+  static const StereoKernels k{Backend::kAvx2, "avx2",    censusRow, censusCostRow,
+                               sadCostRow,     addSubRow, boxRow,    wtaUpdateRows};
+  return k;
+}
+
+}  // namespace svslam::simd

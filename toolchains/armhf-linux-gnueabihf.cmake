@@ -1,0 +1,21 @@
+# Cross build for 32-bit ARM Linux, hard float, with NEON (armv7-a) using Debian's cross g++;
+# tests run under qemu-user.
+#   apt-get install g++-arm-linux-gnueabihf qemu-user-static
+#   cmake -S . -B build-armhf -DCMAKE_TOOLCHAIN_FILE=toolchains/armhf-linux-gnueabihf.cmake
+set(CMAKE_SYSTEM_NAME Linux)
+set(CMAKE_SYSTEM_PROCESSOR armv7)
+
+set(CMAKE_C_COMPILER arm-linux-gnueabihf-gcc)
+set(CMAKE_CXX_COMPILER arm-linux-gnueabihf-g++)
+set(CMAKE_C_FLAGS_INIT "-mfpu=neon -mfloat-abi=hard")
+set(CMAKE_CXX_FLAGS_INIT "-mfpu=neon -mfloat-abi=hard")
+
+set(CMAKE_FIND_ROOT_PATH /usr/arm-linux-gnueabihf)
+set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
+set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
+set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
+# Header-only, architecture-independent packages (Eigen's config in /usr/share) come from the
+# host; compiled libraries and their configs only from the target's multiarch paths and sysroot.
+set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE BOTH)
+
+set(CMAKE_CROSSCOMPILING_EMULATOR qemu-arm-static;-L;/usr/arm-linux-gnueabihf)
