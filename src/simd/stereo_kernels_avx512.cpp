@@ -4,6 +4,8 @@
 // (for the per-column kernels) the scalar reference at an offset.
 #include <immintrin.h>
 
+#include <algorithm>
+
 #include "simd/stereo_kernels.hpp"
 
 namespace svslam::simd {
@@ -43,27 +45,27 @@ void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int wi
   const int cx = win_w / 2;
   const int cy = win_h / 2;
   const int n_off = win_w * win_h - 1;
+  std::ptrdiff_t off[64];  // offset k -> position in the window, row-major, centre skipped
+  for (int dy = 0, k = 0; dy < win_h; ++dy)
+    for (int dx = 0; dx < win_w; ++dx)
+      if (dy != cy || dx != cx) off[k++] = dy * stride + dx;
   const __m256i one = _mm256_set1_epi8(1);
   int x = 0;
   for (; x + 32 <= width; x += 32) {
     const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(win + cy * stride + cx + x));
     __m256i planes[8];
-    for (auto& pl : planes) pl = _mm256_setzero_si256();
-    int k = 0;
-    for (int dy = 0; dy < win_h; ++dy) {
-      const std::uint8_t* r = win + dy * stride + x;
-      for (int dx = 0; dx < win_w; ++dx) {
-        if (dy == cy && dx == cx) continue;
-        const __mmask32 m = _mm256_cmplt_epu8_mask(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + dx)), c);
-        __m256i& pl = planes[k >> 3];
-        pl = _mm256_mask_add_epi8(_mm256_add_epi8(pl, pl), m, _mm256_add_epi8(pl, pl), one);
-        ++k;
+    for (int j = 0; j < 8; ++j) {
+      // Plane j accumulates offsets 8j .. 8j+7 in a register, MSB first.
+      __m256i acc = _mm256_setzero_si256();
+      const int k_end = std::min(n_off, 8 * j + 8);
+      for (int k = 8 * j; k < k_end; ++k) {
+        const __mmask32 m = _mm256_cmplt_epu8_mask(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(win + off[k] + x)), c);
+        acc = _mm256_add_epi8(acc, acc);
+        acc = _mm256_mask_add_epi8(acc, m, acc, one);
       }
-    }
-    // A partial last plane still puts offset k at bit 63 - k: shift it up to the MSB.
-    if (n_off % 8 != 0) {
-      __m256i& pl = planes[n_off >> 3];
-      for (int s = n_off % 8; s < 8; ++s) pl = _mm256_add_epi8(pl, pl);
+      // A partial plane still puts offset k at bit 63 - k: shift it up to the MSB.
+      for (int k = std::max(k_end, 8 * j); k < 8 * j + 8 && k_end > 8 * j; ++k) acc = _mm256_add_epi8(acc, acc);
+      planes[j] = acc;
     }
     transposeStore256(planes, out + x);
   }

@@ -57,6 +57,15 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
     return;
   }
   k_ = &simd::kernels(params_.backend);
+  {
+    // sigma_d for every possible parabola curvature numerator c- + c+ - 2 c0 (an integer up to
+    // twice the largest aggregated cost): one table look-up per pixel instead of a search.
+    const int max_denom = 2 * params_.maxPixelCost() * params_.window_w * params_.window_h;
+    const float inv_area = static_cast<float>(1.0 / (static_cast<double>(params_.window_w) * params_.window_h));
+    sigma_by_denom_.resize(static_cast<std::size_t>(max_denom) + 1);
+    for (int v = 0; v <= max_denom; ++v)
+      sigma_by_denom_[static_cast<std::size_t>(v)] = params_.sigma_model.sigmaFor(static_cast<float>(v) * inv_area);
+  }
   const int D = params_.numDisp();
   const bool census = params_.cost == MatchingCost::kCensus;
   int need = 1;  // the texture gradient reads x +- 1
@@ -177,6 +186,7 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
   const int rw = params_.window_w / 2;
   const double area = static_cast<double>(params_.window_w) * params_.window_h;
   const float inv_area = static_cast<float>(1.0 / area);
+  const int max_denom = static_cast<int>(sigma_by_denom_.size()) - 1;
   const bool use_texture = params_.texture_threshold > 0.0f;
   const double texture_limit = static_cast<double>(params_.texture_threshold) * 2.0 * area;
   const float inf = std::numeric_limits<float>::infinity();
@@ -286,6 +296,7 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       }
       float delta = 0.0f;
       float kappa = 0.0f;
+      float sigma = sigma_by_denom_[0];
       if (idx > 0 && idx + 1 < D) {
         const int cm = s.cm[static_cast<std::size_t>(x)];
         const int cp = s.cp[static_cast<std::size_t>(x)];
@@ -293,10 +304,11 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
         if (cp != kImpossible && denom > 0) {
           if (params_.subpixel) delta = static_cast<float>(cm - cp) / static_cast<float>(2 * denom);
           kappa = static_cast<float>(denom) * inv_area;
+          sigma = sigma_by_denom_[static_cast<std::size_t>(std::min(denom, max_denom))];
         }
       }
       disp[x] = static_cast<float>(d0 + idx) + delta;
-      sig[x] = params_.sigma_model.sigmaFor(kappa);
+      sig[x] = sigma;
       curv[x] = kappa;
       ++counts.valid;
     }

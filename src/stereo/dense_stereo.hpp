@@ -131,6 +131,7 @@ class DenseStereo {
   AlignedBuffer<std::uint8_t> filt_left_, filt_right_;        // SAD rows of stride row_stride_
   std::ptrdiff_t row_stride_ = 0;
   std::vector<std::unique_ptr<Stripe>> stripes_;
+  std::vector<float> sigma_by_denom_;  // sigma_model at kappa = v / window area, v = 0 .. max
 };
 
 }  // namespace svslam
