@@ -149,39 +149,56 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
   std::uint16_t* const s_best_r = s.best_r;
   std::int16_t* const s_idx_r = s.idx_r;
   const __m512i ones = _mm512_set1_epi16(-1);
+  // One WTA step of 32 columns: the state update of the scalar reference, as blends.
+  struct Lanes {
+    __m512i best, bidx, second, cm, cp, pm1, pm2, prev;
+  };
+  auto load = [&](int x) {
+    return Lanes{_mm512_loadu_si512(s_best + x), _mm512_loadu_si512(s_bidx + x), _mm512_loadu_si512(s_second + x),
+                 _mm512_loadu_si512(s_cm + x),   _mm512_loadu_si512(s_cp + x),   _mm512_loadu_si512(s_pm1 + x),
+                 _mm512_loadu_si512(s_pm2 + x),  _mm512_loadu_si512(agg - stride + x)};
+  };
+  auto store = [&](int x, const Lanes& l) {
+    _mm512_storeu_si512(s_best + x, l.best);
+    _mm512_storeu_si512(s_bidx + x, l.bidx);
+    _mm512_storeu_si512(s_second + x, l.second);
+    _mm512_storeu_si512(s_cm + x, l.cm);
+    _mm512_storeu_si512(s_cp + x, l.cp);
+    _mm512_storeu_si512(s_pm1 + x, l.pm1);
+    _mm512_storeu_si512(s_pm2 + x, l.pm2);
+  };
+  auto step = [&](Lanes& l, const __m512i c, const __m512i vi, const __m512i vi_minus1) {
+    const __mmask32 m_new = _mm512_cmplt_epu16_mask(c, l.best);
+    const __mmask32 m_adj = _mm512_mask_cmpeq_epi16_mask(static_cast<__mmask32>(~m_new), l.bidx, vi_minus1);
+    const __mmask32 m_sec = _mm512_mask_cmplt_epu16_mask(static_cast<__mmask32>(~(m_new | m_adj)), c, l.second);
+    l.second = _mm512_mask_mov_epi16(_mm512_mask_mov_epi16(l.second, m_new, l.pm2), m_sec, c);
+    l.best = _mm512_mask_mov_epi16(l.best, m_new, c);
+    l.bidx = _mm512_mask_mov_epi16(l.bidx, m_new, vi);
+    l.cm = _mm512_mask_mov_epi16(l.cm, m_new, l.prev);
+    l.cp = _mm512_mask_mov_epi16(_mm512_mask_mov_epi16(l.cp, m_new, ones), m_adj, c);
+    l.pm2 = l.pm1;
+    l.pm1 = _mm512_min_epu16(l.pm1, c);
+    l.prev = c;
+  };
   int x = 0;
-  for (; x + 32 <= width; x += 32) {
-    __m512i best = _mm512_loadu_si512(s_best + x);
-    __m512i bidx = _mm512_loadu_si512(s_bidx + x);
-    __m512i second = _mm512_loadu_si512(s_second + x);
-    __m512i cm = _mm512_loadu_si512(s_cm + x);
-    __m512i cp = _mm512_loadu_si512(s_cp + x);
-    __m512i pm1 = _mm512_loadu_si512(s_pm1 + x);
-    __m512i pm2 = _mm512_loadu_si512(s_pm2 + x);
-    __m512i prev = _mm512_loadu_si512(agg - stride + x);
+  // Two independent 32-column groups per pass: the per-plane updates are a dependency chain.
+  for (; x + 64 <= width; x += 64) {
+    Lanes a = load(x), b = load(x + 32);
     for (int p = 0; p < n_planes; ++p) {
       const __m512i vi = _mm512_set1_epi16(static_cast<short>(i0 + p));
-      const __m512i c = _mm512_loadu_si512(agg + p * stride + x);
-      const __mmask32 m_new = _mm512_cmplt_epu16_mask(c, best);
-      const __mmask32 m_adj = _mm512_mask_cmpeq_epi16_mask(static_cast<__mmask32>(~m_new), bidx,
-                                                           _mm512_set1_epi16(static_cast<short>(i0 + p - 1)));
-      const __mmask32 m_sec = _mm512_mask_cmplt_epu16_mask(static_cast<__mmask32>(~(m_new | m_adj)), c, second);
-      second = _mm512_mask_mov_epi16(_mm512_mask_mov_epi16(second, m_new, pm2), m_sec, c);
-      best = _mm512_mask_mov_epi16(best, m_new, c);
-      bidx = _mm512_mask_mov_epi16(bidx, m_new, vi);
-      cm = _mm512_mask_mov_epi16(cm, m_new, prev);
-      cp = _mm512_mask_mov_epi16(_mm512_mask_mov_epi16(cp, m_new, ones), m_adj, c);
-      pm2 = pm1;
-      pm1 = _mm512_min_epu16(pm1, c);
-      prev = c;
+      const __m512i vi_minus1 = _mm512_set1_epi16(static_cast<short>(i0 + p - 1));
+      step(a, _mm512_loadu_si512(agg + p * stride + x), vi, vi_minus1);
+      step(b, _mm512_loadu_si512(agg + p * stride + x + 32), vi, vi_minus1);
     }
-    _mm512_storeu_si512(s_best + x, best);
-    _mm512_storeu_si512(s_bidx + x, bidx);
-    _mm512_storeu_si512(s_second + x, second);
-    _mm512_storeu_si512(s_cm + x, cm);
-    _mm512_storeu_si512(s_cp + x, cp);
-    _mm512_storeu_si512(s_pm1 + x, pm1);
-    _mm512_storeu_si512(s_pm2 + x, pm2);
+    store(x, a);
+    store(x + 32, b);
+  }
+  for (; x + 32 <= width; x += 32) {
+    Lanes a = load(x);
+    for (int p = 0; p < n_planes; ++p)
+      step(a, _mm512_loadu_si512(agg + p * stride + x), _mm512_set1_epi16(static_cast<short>(i0 + p)),
+           _mm512_set1_epi16(static_cast<short>(i0 + p - 1)));
+    store(x, a);
   }
   if (x < width) {
     // Left-image part of the tail: the scalar reference on [x, width) without right pixels
