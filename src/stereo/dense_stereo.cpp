@@ -191,7 +191,8 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
   const double texture_limit = static_cast<double>(params_.texture_threshold) * 2.0 * area;
   const float inf = std::numeric_limits<float>::infinity();
   std::fill(s.ring_row.begin(), s.ring_row.end(), -1);
-  DenseStereoStats counts;  // local so the compiler keeps the counters in registers
+  DenseStereoStats counts;
+  int verdicts[5] = {0, 0, 0, 0, 0};  // valid, no candidate, low texture, not unique, LR
 
   // Central-difference gradient |I(x+1) - I(x-1)| of left row r, for the texture filter.
   auto gradRow = [&](int r) {
@@ -269,50 +270,41 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
     float* disp = out.disparity_px.row(y);
     float* sig = out.sigma_d_px.row(y);
     float* curv = out.curvature.row(y);
+    // Branch-light: every test is evaluated and the first failing one (in the order no
+    // candidate, texture, uniqueness, reverse correlation) is the pixel's verdict.
+    const std::uint64_t uniq_factor = 100u + static_cast<std::uint32_t>(params_.uniqueness_pct);
     for (int x = 0; x < W; ++x) {
-      disp[x] = inf;
-      sig[x] = inf;
-      curv[x] = inf;
-      const int idx = s.bidx[static_cast<std::size_t>(x)];
-      if (idx < 0) { ++counts.no_candidate; continue; }
-      if (use_texture && static_cast<double>(s.tex_row[static_cast<std::size_t>(x)]) < texture_limit) {
-        ++counts.low_texture;
-        continue;
-      }
-      const std::uint32_t best = s.best[static_cast<std::size_t>(x)];
-      if (params_.uniqueness_pct > 0) {
-        const std::uint32_t second = s.second[static_cast<std::size_t>(x)];
-        // No competitor at all (fewer than 3 candidates, at the left border) cannot be verified.
-        if (second == kImpossible ||
-            static_cast<std::uint64_t>(second) * 100u <= static_cast<std::uint64_t>(best) * (100u + static_cast<std::uint32_t>(params_.uniqueness_pct))) {
-          ++counts.not_unique;
-          continue;
-        }
-      }
-      if (params_.lr_check) {
-        const int xr = x - (d0 + idx);
-        const int idr = s.idx_r[static_cast<std::size_t>(xr)];
-        if (idr < 0 || std::abs(idr - idx) > params_.lr_max_diff) { ++counts.lr_inconsistent; continue; }
-      }
-      float delta = 0.0f;
-      float kappa = 0.0f;
-      float sigma = sigma_by_denom_[0];
-      if (idx > 0 && idx + 1 < D) {
-        const int cm = s.cm[static_cast<std::size_t>(x)];
-        const int cp = s.cp[static_cast<std::size_t>(x)];
-        const int denom = cm + cp - 2 * static_cast<int>(best);
-        if (cp != kImpossible && denom > 0) {
-          if (params_.subpixel) delta = static_cast<float>(cm - cp) / static_cast<float>(2 * denom);
-          kappa = static_cast<float>(denom) * inv_area;
-          sigma = sigma_by_denom_[static_cast<std::size_t>(std::min(denom, max_denom))];
-        }
-      }
-      disp[x] = static_cast<float>(d0 + idx) + delta;
-      sig[x] = sigma;
-      curv[x] = kappa;
-      ++counts.valid;
+      const std::size_t ux = static_cast<std::size_t>(x);
+      const int idx = s.bidx[ux];
+      const std::uint32_t best = s.best[ux];
+      const std::uint32_t second = s.second[ux];
+      const bool no_candidate = idx < 0;
+      const bool low_texture = use_texture && static_cast<double>(s.tex_row[ux]) < texture_limit;
+      // No competitor at all (fewer than 3 candidates, at the left border) cannot be verified.
+      const bool not_unique = params_.uniqueness_pct > 0 &&
+                              (second == kImpossible || static_cast<std::uint64_t>(second) * 100u <= best * uniq_factor);
+      const int xr = std::max(0, x - (d0 + idx));
+      const int idr = s.idx_r[static_cast<std::size_t>(xr)];
+      const bool lr_bad = params_.lr_check && (idr < 0 || std::abs(idr - idx) > params_.lr_max_diff);
+      const int verdict = no_candidate ? 1 : low_texture ? 2 : not_unique ? 3 : lr_bad ? 4 : 0;
+      verdicts[verdict] += 1;
+      const int cm = s.cm[ux];
+      const int cp = s.cp[ux];
+      const int denom = cm + cp - 2 * static_cast<int>(best);
+      const bool parabola = idx > 0 && idx + 1 < D && cp != kImpossible && denom > 0;
+      const int safe_denom = parabola ? denom : 1;
+      const float delta = parabola && params_.subpixel ? static_cast<float>(cm - cp) / static_cast<float>(2 * safe_denom) : 0.0f;
+      const bool valid = verdict == 0;
+      disp[x] = valid ? static_cast<float>(d0 + idx) + delta : inf;
+      sig[x] = valid ? sigma_by_denom_[static_cast<std::size_t>(parabola ? std::min(denom, max_denom) : 0)] : inf;
+      curv[x] = valid ? (parabola ? static_cast<float>(denom) * inv_area : 0.0f) : inf;
     }
   }
+  counts.valid = verdicts[0];
+  counts.no_candidate = verdicts[1];
+  counts.low_texture = verdicts[2];
+  counts.not_unique = verdicts[3];
+  counts.lr_inconsistent = verdicts[4];
   s.stats = counts;
 }
 
