@@ -210,15 +210,17 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
   for (int p = 0; p < n_planes; ++p) {
     const int off = d0 + i0 + p;
     const std::uint16_t* a = agg + p * stride + off;
-    const __m512i vi = _mm512_set1_epi16(static_cast<short>(i0 + p));
+    const __m256i vi = _mm256_set1_epi16(static_cast<short>(i0 + p));
     const int n_right = width - off;
     int xr = 0;
-    for (; xr + 32 <= n_right; xr += 32) {
-      const __m512i c = _mm512_loadu_si512(a + xr);
-      const __m512i br = _mm512_loadu_si512(s_best_r + xr);
-      const __mmask32 upd = _mm512_cmplt_epu16_mask(c, br);
-      _mm512_storeu_si512(s_best_r + xr, _mm512_mask_mov_epi16(br, upd, c));
-      _mm512_storeu_si512(s_idx_r + xr, _mm512_mask_mov_epi16(_mm512_loadu_si512(s_idx_r + xr), upd, vi));
+    // 256-bit: the candidate row is misaligned by d, see boxRow.
+    for (; xr + 16 <= n_right; xr += 16) {
+      const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + xr));
+      const __m256i br = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(s_best_r + xr));
+      const __mmask16 upd = _mm256_cmplt_epu16_mask(c, br);
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(s_best_r + xr), _mm256_mask_mov_epi16(br, upd, c));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(s_idx_r + xr),
+                          _mm256_mask_mov_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(s_idx_r + xr)), upd, vi));
     }
     for (; xr < n_right; ++xr) {
       if (a[xr] < s_best_r[xr]) {
