@@ -33,6 +33,7 @@ struct DenseStereo::Stripe {
   AlignedBuffer<std::int16_t> bidx, idx_r;
   std::vector<std::uint32_t> tex_col, tex_row;
   std::vector<std::uint8_t> grad;
+  std::vector<std::uint32_t> prefilter_scratch;  // column sums of the mean-removal prefilter
   DenseStereoStats stats;
 
   simd::WtaRowState state() {
@@ -112,6 +113,7 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
     st->tex_col.assign(static_cast<std::size_t>(width), 0);
     st->tex_row.assign(static_cast<std::size_t>(width), 0);
     st->grad.assign(static_cast<std::size_t>(width), 0);
+    st->prefilter_scratch.assign(static_cast<std::size_t>(width + params_.prefilter_size), 0);
     stripes_.push_back(std::move(st));
   }
 }
@@ -127,11 +129,11 @@ void DenseStereo::padImage(ImageView<const std::uint8_t> src, ImageU8& dst, int 
   }
 }
 
-void DenseStereo::prepareRows(int y0, int y1) {
+void DenseStereo::prepareRows(Stripe& s) {
+  const int y0 = s.y0;
+  const int y1 = s.y1;
   const bool census = params_.cost == MatchingCost::kCensus;
-  std::vector<std::uint32_t> scratch;
-  if (!census && params_.prefilter == SadPrefilter::kMeanRemoval)
-    scratch.resize(static_cast<std::size_t>(width_ + params_.prefilter_size));
+  std::vector<std::uint32_t>& scratch = s.prefilter_scratch;  // sized in the constructor
   for (int y = y0; y < y1; ++y) {
     for (int side = 0; side < 2; ++side) {
       const ImageU8& padded = side == 0 ? padded_left_ : padded_right_;
@@ -333,16 +335,22 @@ Status DenseStereo::process(ImageView<const std::uint8_t> left, ImageView<const 
   out.sigma_d_px.resize(width_, height_);
   out.curvature.resize(width_, height_);
 
+  // The task lambdas capture two pointers only, so std::function stores them without allocating.
+  struct Frame {
+    ImageView<const std::uint8_t> left, right;
+    DisparityResult* out;
+  } frame{left, right, &out};
   const int n = static_cast<int>(stripes_.size());
-  const int padded_h = height_ + 2 * pad_y_;
-  executor.parallelFor(n, [&](int t) {
-    const int y0 = static_cast<int>(static_cast<long>(padded_h) * t / n);
-    const int y1 = static_cast<int>(static_cast<long>(padded_h) * (t + 1) / n);
-    padImage(left, padded_left_, y0, y1);
-    padImage(right, padded_right_, y0, y1);
+  executor.parallelFor(n, [this, &frame](int t) {
+    const int padded_h = height_ + 2 * pad_y_;
+    const int n_tasks = static_cast<int>(stripes_.size());
+    const int y0 = static_cast<int>(static_cast<long>(padded_h) * t / n_tasks);
+    const int y1 = static_cast<int>(static_cast<long>(padded_h) * (t + 1) / n_tasks);
+    padImage(frame.left, padded_left_, y0, y1);
+    padImage(frame.right, padded_right_, y0, y1);
   });
-  executor.parallelFor(n, [&](int t) { prepareRows(stripes_[static_cast<std::size_t>(t)]->y0, stripes_[static_cast<std::size_t>(t)]->y1); });
-  executor.parallelFor(n, [&](int t) { matchRows(*stripes_[static_cast<std::size_t>(t)], out); });
+  executor.parallelFor(n, [this](int t) { prepareRows(*stripes_[static_cast<std::size_t>(t)]); });
+  executor.parallelFor(n, [this, &frame](int t) { matchRows(*stripes_[static_cast<std::size_t>(t)], *frame.out); });
 
   DenseStereoStats total;
   for (const auto& s : stripes_) {

@@ -108,7 +108,7 @@ class DenseStereo {
  private:
   struct Stripe;
   void padImage(ImageView<const std::uint8_t> src, ImageU8& dst, int y0, int y1) const;
-  void prepareRows(int y0, int y1);  // census or prefilter rows of both images
+  void prepareRows(Stripe& s);  // census or prefilter rows [s.y0, s.y1) of both images
   void matchRows(Stripe& s, DisparityResult& out);
   std::uint8_t* ringPlane(Stripe& s, int row, int i) const;  // cost plane i of a row in the ring
   void computeCostPlane(Stripe& s, int row, int i) const;

@@ -3,12 +3,25 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cstdlib>
+#include <new>
 #include <cmath>
 #include <cstring>
 #include <random>
 
 #include "core/executor.hpp"
 #include "stereo/dense_stereo.hpp"
+
+// Counts heap allocations made by this test binary (for the "allocates nothing once warm" test).
+static std::atomic<long> g_allocations{0};
+void* operator new(std::size_t n) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace svslam {
 namespace {
@@ -153,6 +166,26 @@ TEST(DenseStereo, IdenticalForAnyStripeCountExecutorAndBackend) {
         EXPECT_EQ(r0.stats.valid, r.stats.valid);
       }
     }
+  }
+}
+
+TEST(DenseStereo, AllocatesNothingOnceWarm) {
+  const ImageU8 left = texture(200, 100, 12);
+  const ImageU8 right = shifted(left, 6);
+  for (MatchingCost c : {MatchingCost::kCensus, MatchingCost::kSad}) {
+    DenseStereoParams p;
+    p.cost = c;
+    p.prefilter = SadPrefilter::kMeanRemoval;
+    p.max_disp = 24;
+    p.num_stripes = 3;
+    p.texture_threshold = 1.0f;
+    DenseStereo s(p, 200, 100);
+    DisparityResult r;
+    SerialExecutor ex;
+    ASSERT_TRUE(s.process(left.cview(), right.cview(), r, ex).isOk());  // warm: sizes the outputs
+    const long before = g_allocations.load();
+    ASSERT_TRUE(s.process(left.cview(), right.cview(), r, ex).isOk());
+    EXPECT_EQ(g_allocations.load() - before, 0) << toString(c);
   }
 }
 
