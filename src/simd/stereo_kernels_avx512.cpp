@@ -49,19 +49,21 @@ void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int wi
   for (int dy = 0, k = 0; dy < win_h; ++dy)
     for (int dx = 0; dx < win_w; ++dx)
       if (dy != cy || dx != cx) off[k++] = dy * stride + dx;
-  const __m256i one = _mm256_set1_epi8(1);
+  // Unsigned p < c as a signed compare of p ^ 0x80 and c ^ 0x80: t = -1 where p < c, and
+  // acc = 2 acc - t appends the bit. Plain vector ops, no mask registers.
+  const __m256i flip = _mm256_set1_epi8(static_cast<char>(0x80));
   int x = 0;
   for (; x + 32 <= width; x += 32) {
-    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(win + cy * stride + cx + x));
+    const __m256i c = _mm256_xor_si256(
+        _mm256_loadu_si256(reinterpret_cast<const __m256i*>(win + cy * stride + cx + x)), flip);
     __m256i planes[8];
     for (int j = 0; j < 8; ++j) {
       // Plane j accumulates offsets 8j .. 8j+7 in a register, MSB first.
       __m256i acc = _mm256_setzero_si256();
       const int k_end = std::min(n_off, 8 * j + 8);
       for (int k = 8 * j; k < k_end; ++k) {
-        const __mmask32 m = _mm256_cmplt_epu8_mask(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(win + off[k] + x)), c);
-        acc = _mm256_add_epi8(acc, acc);
-        acc = _mm256_mask_add_epi8(acc, m, acc, one);
+        const __m256i p = _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(win + off[k] + x)), flip);
+        acc = _mm256_sub_epi8(_mm256_add_epi8(acc, acc), _mm256_cmpgt_epi8(c, p));
       }
       // A partial plane still puts offset k at bit 63 - k: shift it up to the MSB.
       for (int k = std::max(k_end, 8 * j); k < 8 * j + 8 && k_end > 8 * j; ++k) acc = _mm256_add_epi8(acc, acc);
