@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <sstream>
 
@@ -138,6 +139,23 @@ Status ArgParser::getSize(const std::string& name, int& w, int& h, bool require_
   if (w < 1 || h < 1 || w % 2 == 0 || h % 2 == 0)
     return Status::invalidArgument("--" + name + ": window sides must be odd and >= 1, got " + v);
   return Status::ok();
+}
+
+std::optional<int> parseCommandLine(ArgParser& p, const std::vector<std::string>& args) {
+  if (Status s = p.parse(args); !s) {
+    std::fprintf(stderr, "svslam %s\n", s.message().c_str());
+    return 2;
+  }
+  if (p.helpRequested()) {
+    std::fputs(p.help().c_str(), stdout);
+    return 0;
+  }
+  return std::nullopt;
+}
+
+int reportFailure(const std::string& command, const Status& s) {
+  std::fprintf(stderr, "svslam %s: %s\n", command.c_str(), s.message().c_str());
+  return 1;
 }
 
 }  // namespace svslam::cli

@@ -51,4 +51,11 @@ class ArgParser {
   const Option* find(const std::string& name) const;
 };
 
+// Parses a subcommand's words: returns an exit code to return right away (2 after printing the
+// parse error, 0 after printing --help), or nothing when the command should run.
+std::optional<int> parseCommandLine(ArgParser& p, const std::vector<std::string>& args);
+
+// Prints "svslam <command>: <message>" on stderr and returns exit code 1.
+int reportFailure(const std::string& command, const Status& s);
+
 }  // namespace svslam::cli

@@ -35,18 +35,8 @@ int runDisparity(const std::vector<std::string>& args) {
   p.addOption("out", "FILE", "disparity output: .pfm (float, +inf invalid) or .png (uint16 = d*256, 0 invalid)");
   p.addOption("sigma", "FILE.pfm", "write sigma_d (px) as PFM, +inf where invalid");
   p.addOption("color", "FILE.png", "write a colour-mapped disparity picture");
-  if (Status s = p.parse(args); !s) {
-    std::fprintf(stderr, "svslam %s\n", s.message().c_str());
-    return 2;
-  }
-  if (p.helpRequested()) {
-    std::fputs(p.help().c_str(), stdout);
-    return 0;
-  }
-  auto fail = [](const Status& s) {
-    std::fprintf(stderr, "svslam disparity: %s\n", s.message().c_str());
-    return 1;
-  };
+  if (auto code = parseCommandLine(p, args)) return *code;
+  auto fail = [](const Status& s) { return reportFailure("disparity", s); };
   const bool synthetic = !p.has("left") && !p.has("right");
   if (!synthetic && (!p.has("left") || !p.has("right")))
     return fail(Status::invalidArgument("give both --left and --right (or neither, for the built-in synthetic pair)"));

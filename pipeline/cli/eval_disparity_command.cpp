@@ -46,18 +46,8 @@ int runEvalDisparity(const std::vector<std::string>& args) {
   p.addOption("max-disp", "N", "one past the largest disparity searched (default: the case's)");
   addStereoOptions(p);
   p.addOption("out", "FILE", "write the computed disparity (.pfm or .png; single case only)");
-  if (Status s = p.parse(args); !s) {
-    std::fprintf(stderr, "svslam %s\n", s.message().c_str());
-    return 2;
-  }
-  if (p.helpRequested()) {
-    std::fputs(p.help().c_str(), stdout);
-    return 0;
-  }
-  auto fail = [](const Status& s) {
-    std::fprintf(stderr, "svslam eval-disparity: %s\n", s.message().c_str());
-    return 1;
-  };
+  if (auto code = parseCommandLine(p, args)) return *code;
+  auto fail = [](const Status& s) { return reportFailure("eval-disparity", s); };
 
   // Which cases.
   std::vector<io::StereoGtCase> cases;

@@ -65,18 +65,8 @@ int runFitSigma(const std::vector<std::string>& args) {
   p.addOption("samples-per-case", "N", "at most N pixels per case, evenly subsampled (1000..10000000)", "100000");
   p.addOption("out", "FILE", "write the model (lines 'kappa sigma_px'), usable with --sigma-model");
   addStereoOptions(p);
-  if (Status s = p.parse(args); !s) {
-    std::fprintf(stderr, "svslam %s\n", s.message().c_str());
-    return 2;
-  }
-  if (p.helpRequested()) {
-    std::fputs(p.help().c_str(), stdout);
-    return 0;
-  }
-  auto fail = [](const Status& s) {
-    std::fprintf(stderr, "svslam fit-sigma: %s\n", s.message().c_str());
-    return 1;
-  };
+  if (auto code = parseCommandLine(p, args)) return *code;
+  auto fail = [](const Status& s) { return reportFailure("fit-sigma", s); };
   auto bins = p.getInt("bins", 2, 200);
   if (!bins) return fail(bins.status());
   auto per_case = p.getInt("samples-per-case", 1000, 10000000);
