@@ -198,7 +198,7 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
   const float inf = std::numeric_limits<float>::infinity();
   std::fill(s.ring_row.begin(), s.ring_row.end(), -1);
   DenseStereoStats counts;
-  int verdicts[5] = {0, 0, 0, 0, 0};  // valid, no candidate, low texture, not unique, LR
+  int n_no_candidate = 0, n_low_texture = 0, n_not_unique = 0, n_lr = 0, n_valid = 0;
 
   // Central-difference gradient |I(x+1) - I(x-1)| of left row r, for the texture filter.
   auto gradRow = [&](int r) {
@@ -292,8 +292,15 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       const int xr = std::max(0, x - (d0 + idx));
       const int idr = s.idx_r[static_cast<std::size_t>(xr)];
       const bool lr_bad = params_.lr_check && (idr < 0 || std::abs(idr - idx) > params_.lr_max_diff);
-      const int verdict = no_candidate ? 1 : low_texture ? 2 : not_unique ? 3 : lr_bad ? 4 : 0;
-      verdicts[verdict] += 1;
+      // First failing test, without branches: bit k set for test k. Counted in registers (an
+      // array of counters in memory serialises consecutive pixels through store forwarding).
+      const unsigned failed = static_cast<unsigned>(no_candidate) | (static_cast<unsigned>(low_texture) << 1) |
+                              (static_cast<unsigned>(not_unique) << 2) | (static_cast<unsigned>(lr_bad) << 3);
+      n_no_candidate += static_cast<int>(failed & 1u);
+      n_low_texture += static_cast<int>((failed & 3u) == 2u);
+      n_not_unique += static_cast<int>((failed & 7u) == 4u);
+      n_lr += static_cast<int>(failed == 8u);
+      n_valid += static_cast<int>(failed == 0u);
       const int cm = s.cm[ux];
       const int cp = s.cp[ux];
       const int denom = cm + cp - 2 * static_cast<int>(best);
@@ -302,17 +309,17 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       const float delta = parabola && params_.subpixel
                               ? static_cast<float>(cm - cp) * half_inv_denom_[static_cast<std::size_t>(std::min(safe_denom, max_denom))]
                               : 0.0f;
-      const bool valid = verdict == 0;
+      const bool valid = failed == 0;
       disp[x] = valid ? static_cast<float>(d0 + idx) + delta : inf;
       sig[x] = valid ? sigma_by_denom_[static_cast<std::size_t>(parabola ? std::min(denom, max_denom) : 0)] : inf;
       curv[x] = valid ? (parabola ? static_cast<float>(denom) * inv_area : 0.0f) : inf;
     }
   }
-  counts.valid = verdicts[0];
-  counts.no_candidate = verdicts[1];
-  counts.low_texture = verdicts[2];
-  counts.not_unique = verdicts[3];
-  counts.lr_inconsistent = verdicts[4];
+  counts.no_candidate = n_no_candidate;
+  counts.low_texture = n_low_texture;
+  counts.not_unique = n_not_unique;
+  counts.lr_inconsistent = n_lr;
+  counts.valid = n_valid;
   s.stats = counts;
 }
 
