@@ -59,16 +59,13 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
   }
   k_ = &simd::kernels(params_.backend);
   {
-    // sigma_d and 1 / (2 v) for every possible parabola curvature numerator v = c- + c+ - 2 c0
-    // (an integer up to twice the largest aggregated cost): table look-ups instead of a search
-    // and a division per pixel.
+    // sigma_d for every possible parabola curvature numerator v = c- + c+ - 2 c0 (an integer up
+    // to twice the largest aggregated cost): one table look-up per pixel instead of a search.
     const int max_denom = 2 * params_.maxPixelCost() * params_.window_w * params_.window_h;
     const float inv_area = static_cast<float>(1.0 / (static_cast<double>(params_.window_w) * params_.window_h));
     sigma_by_denom_.resize(static_cast<std::size_t>(max_denom) + 1);
-    half_inv_denom_.resize(static_cast<std::size_t>(max_denom) + 1);
     for (int v = 0; v <= max_denom; ++v) {
       sigma_by_denom_[static_cast<std::size_t>(v)] = params_.sigma_model.sigmaFor(static_cast<float>(v) * inv_area);
-      half_inv_denom_[static_cast<std::size_t>(v)] = v > 0 ? 0.5f / static_cast<float>(v) : 0.0f;
     }
   }
   const int D = params_.numDisp();
@@ -278,7 +275,9 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
     float* curv = out.curvature.row(y);
     // Branch-light: every test is evaluated and the first failing one (in the order no
     // candidate, texture, uniqueness, reverse correlation) is the pixel's verdict.
-    const std::uint64_t uniq_factor = 100u + static_cast<std::uint32_t>(params_.uniqueness_pct);
+    const bool subpixel = params_.subpixel;
+    const float* const sigma_table = sigma_by_denom_.data();
+  const std::uint64_t uniq_factor = 100u + static_cast<std::uint32_t>(params_.uniqueness_pct);
     for (int x = 0; x < W; ++x) {
       const std::size_t ux = static_cast<std::size_t>(x);
       const int idx = s.bidx[ux];
@@ -306,12 +305,10 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       const int denom = cm + cp - 2 * static_cast<int>(best);
       const bool parabola = idx > 0 && idx + 1 < D && cp != kImpossible && denom > 0;
       const int safe_denom = parabola ? denom : 1;
-      const float delta = parabola && params_.subpixel
-                              ? static_cast<float>(cm - cp) * half_inv_denom_[static_cast<std::size_t>(std::min(safe_denom, max_denom))]
-                              : 0.0f;
+      const float delta = parabola && subpixel ? static_cast<float>(cm - cp) / static_cast<float>(2 * safe_denom) : 0.0f;
       const bool valid = failed == 0;
       disp[x] = valid ? static_cast<float>(d0 + idx) + delta : inf;
-      sig[x] = valid ? sigma_by_denom_[static_cast<std::size_t>(parabola ? std::min(denom, max_denom) : 0)] : inf;
+      sig[x] = valid ? sigma_table[parabola ? std::min(denom, max_denom) : 0] : inf;
       curv[x] = valid ? (parabola ? static_cast<float>(denom) * inv_area : 0.0f) : inf;
     }
   }

@@ -18,7 +18,7 @@
 //     reverse correlation (left-right check:
 //     the right image's own WTA on the same costs must agree within lr_max_diff);
 //  5. sub-pixel: parabola through the costs at d-1, d, d+1:
-//        delta = (c- - c+) / (2 (c- + c+ - 2 c0)),  |delta| <= 1/2 (reciprocal from a table),
+//        delta = (c- - c+) / (2 (c- + c+ - 2 c0)),  |delta| <= 1/2,
 //     curvature kappa = (c- + c+ - 2 c0) / window area, sigma_d = sigma_model(kappa).
 #include <cstdint>
 #include <memory>
@@ -132,7 +132,6 @@ class DenseStereo {
   std::ptrdiff_t row_stride_ = 0;
   std::vector<std::unique_ptr<Stripe>> stripes_;
   std::vector<float> sigma_by_denom_;  // sigma_model at kappa = v / window area, v = 0 .. max
-  std::vector<float> half_inv_denom_;  // 1 / (2 v), v = 0 .. max (0 for v = 0)
 };
 
 }  // namespace svslam
