@@ -89,14 +89,16 @@ void BM_WtaPlanes(benchmark::State& st) {
                             u[4].data(), u[5].data(), u[6].data(), idx_r.data()};
   for (auto _ : st) {
     simd::wtaInitRow(s, kW);
-    for (int i0 = 0; i0 < 64; i0 += 16) k->wtaUpdateRows(agg.data() + (i0 + 1) * stride, stride, 16, i0, kW, 0, s);
+    for (int i0 = 0; i0 < 64; i0 += 16)
+      k->wtaUpdateRows(agg.data() + (i0 + 1) * stride, stride, 16, i0, kW, 0, s);
     benchmark::ClobberMemory();
   }
   st.SetItemsProcessed(st.iterations() * kW * 64);
 }
 
 void backends(benchmark::internal::Benchmark* b) {
-  for (auto be : {simd::Backend::kScalar, simd::Backend::kAvx2, simd::Backend::kAvx512, simd::Backend::kNeon})
+  for (auto be :
+       {simd::Backend::kScalar, simd::Backend::kAvx2, simd::Backend::kAvx512, simd::Backend::kNeon})
     b->Arg(static_cast<int>(be));
   b->ArgName("backend");
 }

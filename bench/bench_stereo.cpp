@@ -10,13 +10,12 @@
 #include <cstdio>
 #include <map>
 #include <memory>
-#include <random>
-#include <string>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <random>
+#include <string>
 
 #include "pipeline/thread_pool_executor.hpp"
 #include "stereo/dense_stereo.hpp"
@@ -37,7 +36,8 @@ const Pair& pairOfSize(int w, int h) {
   cv::Mat r = cv::imread(dir + "imR.png", cv::IMREAD_GRAYSCALE);
   if (l.empty() || r.empty()) {
     static bool told = false;
-    if (!told) std::fprintf(stderr, "bench_stereo: %s absent, using a synthetic pair\n", dir.c_str());
+    if (!told)
+      std::fprintf(stderr, "bench_stereo: %s absent, using a synthetic pair\n", dir.c_str());
     told = true;
     std::mt19937 rng(7);
     l.create(h, w, CV_8U);
@@ -122,7 +122,8 @@ void BM_OpenCvSGBM(benchmark::State& st) {
   const int nd = static_cast<int>(st.range(2)), threads = static_cast<int>(st.range(3));
   const Pair& p = pairOfSize(w, h);
   cv::setNumThreads(threads);
-  auto sgbm = cv::StereoSGBM::create(0, nd, 5, 8 * 25, 32 * 25, 1, 63, 10, 100, 2, cv::StereoSGBM::MODE_SGBM_3WAY);
+  auto sgbm = cv::StereoSGBM::create(0, nd, 5, 8 * 25, 32 * 25, 1, 63, 10, 100, 2,
+                                     cv::StereoSGBM::MODE_SGBM_3WAY);
   cv::Mat d;
   for (auto _ : st) {
     sgbm->compute(p.left, p.right, d);
@@ -160,11 +161,15 @@ class RatioReporter : public benchmark::ConsoleReporter {
     ConsoleReporter::Finalize();
     std::printf("\nRatios (time of svslam / time of OpenCV, same images, same run):\n");
     for (const auto& [cfg, m] : times_) {
-      auto get = [&](const char* k) { auto it = m.find(k); return it == m.end() ? NAN : it->second; };
+      auto get = [&](const char* k) {
+        auto it = m.find(k);
+        return it == m.end() ? NAN : it->second;
+      };
       const double census = get("BM_Svslam/census9x7"), sad = get("BM_Svslam/sad9x9");
       const double bm = get("BM_OpenCvBM"), sgbm = get("BM_OpenCvSGBM");
-      std::printf("%-40s census/BM %.3f  census/SGBM %.3f  sad/BM %.3f  census %.2f ms  BM %.2f ms\n",
-                  cfg.c_str(), census / bm, census / sgbm, sad / bm, census, bm);
+      std::printf(
+          "%-40s census/BM %.3f  census/SGBM %.3f  sad/BM %.3f  census %.2f ms  BM %.2f ms\n",
+          cfg.c_str(), census / bm, census / sgbm, sad / bm, census, bm);
     }
   }
 

@@ -5,10 +5,9 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <string>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "eval/disparity_metrics.hpp"
 #include "pipeline/cli/stereo_case.hpp"
@@ -27,16 +26,20 @@ svslam::ImageF32 fromOpenCv(const cv::Mat& d16, int min_disp) {
 }
 
 cv::Mat asMat(const svslam::ImageU8& img) {
-  return cv::Mat(img.height(), img.width(), CV_8U, const_cast<std::uint8_t*>(img.row(0)), static_cast<std::size_t>(img.stride()));
+  return cv::Mat(img.height(), img.width(), CV_8U, const_cast<std::uint8_t*>(img.row(0)),
+                 static_cast<std::size_t>(img.stride()));
 }
 
-void print(const char* method, const std::string& name, const svslam::Result<svslam::DisparityMetrics>& m) {
+void print(const char* method, const std::string& name,
+           const svslam::Result<svslam::DisparityMetrics>& m) {
   if (!m) {
     std::printf("%-10s %-36s error: %s\n", method, name.c_str(), m.status().message().c_str());
     return;
   }
-  std::printf("%-10s %-36s bad1(valid) %6.2f %%  bad3(valid) %6.2f %%  density %6.2f %%  bad1(all) %6.2f %%\n", method,
-              name.c_str(), m->bad1_valid_pct, m->bad3_valid_pct, m->density_pct, m->bad1_all_pct);
+  std::printf(
+      "%-10s %-36s bad1(valid) %6.2f %%  bad3(valid) %6.2f %%  density %6.2f %%  bad1(all) %6.2f "
+      "%%\n",
+      method, name.c_str(), m->bad1_valid_pct, m->bad3_valid_pct, m->density_pct, m->bad1_all_pct);
 }
 
 }  // namespace
@@ -44,7 +47,7 @@ void print(const char* method, const std::string& name, const svslam::Result<svs
 int main() {
   const std::string data = SVSLAM_DATA_DIR;
   const char* cases[] = {"middlebury_v2/tsukuba", "middlebury_v2/venus", "middlebury_v2/teddy",
-                         "middlebury_v2/cones", "middlebury2006_aloe", "kitti_stereo2012_000070"};
+                         "middlebury_v2/cones",   "middlebury2006_aloe", "kitti_stereo2012_000070"};
   if (!std::filesystem::exists(data)) {
     std::printf("compare_accuracy: %s absent, nothing to compare\n", data.c_str());
     return 0;
@@ -62,17 +65,24 @@ int main() {
     if (std::string(c).rfind("kitti", 0) == 0) p.uniqueness_pct = 0;
     svslam::DisparityResult r;
     if (svslam::cli::computeDisparity(*loaded, p, ex, r, nullptr))
-      print("svslam", info->name, svslam::evaluateDisparity(r.disparity_px.cview(), loaded->gt.cview(), loaded->mask.cview()));
+      print("svslam", info->name,
+            svslam::evaluateDisparity(r.disparity_px.cview(), loaded->gt.cview(),
+                                      loaded->mask.cview()));
     cv::Mat d;
     auto bm = cv::StereoBM::create(nd, 9);
     bm->setTextureThreshold(10);
     bm->setUniquenessRatio(10);
     bm->setDisp12MaxDiff(1);
     bm->compute(asMat(loaded->left), asMat(loaded->right), d);
-    print("StereoBM", info->name, svslam::evaluateDisparity(fromOpenCv(d, 0).cview(), loaded->gt.cview(), loaded->mask.cview()));
-    auto sgbm = cv::StereoSGBM::create(0, nd, 5, 8 * 25, 32 * 25, 1, 63, 10, 100, 2, cv::StereoSGBM::MODE_SGBM_3WAY);
+    print("StereoBM", info->name,
+          svslam::evaluateDisparity(fromOpenCv(d, 0).cview(), loaded->gt.cview(),
+                                    loaded->mask.cview()));
+    auto sgbm = cv::StereoSGBM::create(0, nd, 5, 8 * 25, 32 * 25, 1, 63, 10, 100, 2,
+                                       cv::StereoSGBM::MODE_SGBM_3WAY);
     sgbm->compute(asMat(loaded->left), asMat(loaded->right), d);
-    print("SGBM-3way", info->name, svslam::evaluateDisparity(fromOpenCv(d, 0).cview(), loaded->gt.cview(), loaded->mask.cview()));
+    print("SGBM-3way", info->name,
+          svslam::evaluateDisparity(fromOpenCv(d, 0).cview(), loaded->gt.cview(),
+                                    loaded->mask.cview()));
   }
   return 0;
 }

@@ -19,7 +19,8 @@ class Texture {
   // Intensity at surface coordinates (s, t) in pixels.
   float at(float s, float t) const {
     float v = 0.0f, amp = 60.0f;
-    for (float period = 32.0f; period >= 2.0f; period *= 0.5f, amp *= 0.7f) v += amp * lerp(s / period, t / period);
+    for (float period = 32.0f; period >= 2.0f; period *= 0.5f, amp *= 0.7f)
+      v += amp * lerp(s / period, t / period);
     return std::fmin(255.0f, std::fmax(0.0f, 128.0f + v));
   }
 
@@ -29,8 +30,11 @@ class Texture {
     const float fs = std::floor(s), ft = std::floor(t);
     const int i = static_cast<int>(fs) & (kN - 1), j = static_cast<int>(ft) & (kN - 1);
     const float a = s - fs, b = t - ft;
-    auto L = [&](int ii, int jj) { return lattice_[static_cast<std::size_t>((jj & (kN - 1)) * kN + (ii & (kN - 1)))]; };
-    return (1 - a) * (1 - b) * L(i, j) + a * (1 - b) * L(i + 1, j) + (1 - a) * b * L(i, j + 1) + a * b * L(i + 1, j + 1);
+    auto L = [&](int ii, int jj) {
+      return lattice_[static_cast<std::size_t>((jj & (kN - 1)) * kN + (ii & (kN - 1)))];
+    };
+    return (1 - a) * (1 - b) * L(i, j) + a * (1 - b) * L(i + 1, j) + (1 - a) * b * L(i, j + 1) +
+           a * b * L(i + 1, j + 1);
   }
   std::vector<float> lattice_;
 };
@@ -40,11 +44,15 @@ class Texture {
 Status SyntheticPairParams::validate() const {
   if (width < 32 || width > 8192 || height < 32 || height > 8192)
     return Status::invalidArgument("synthetic pair size must be in 32..8192");
-  if (!std::isfinite(d_far_px) || d_far_px < 0) return Status::invalidArgument("d_far_px must be finite and >= 0");
-  if (!std::isfinite(slope) || std::fabs(slope) >= 0.5f) return Status::invalidArgument("|slope| must be < 0.5");
-  if (!std::isfinite(d_near_px) || d_near_px <= d_far_px + std::fabs(slope) * static_cast<float>(width))
+  if (!std::isfinite(d_far_px) || d_far_px < 0)
+    return Status::invalidArgument("d_far_px must be finite and >= 0");
+  if (!std::isfinite(slope) || std::fabs(slope) >= 0.5f)
+    return Status::invalidArgument("|slope| must be < 0.5");
+  if (!std::isfinite(d_near_px) ||
+      d_near_px <= d_far_px + std::fabs(slope) * static_cast<float>(width))
     return Status::invalidArgument("d_near_px must exceed every background disparity");
-  if (d_near_px >= static_cast<float>(width) / 2) return Status::invalidArgument("d_near_px must be < width / 2");
+  if (d_near_px >= static_cast<float>(width) / 2)
+    return Status::invalidArgument("d_near_px must be < width / 2");
   return Status::ok();
 }
 

@@ -35,7 +35,8 @@ Status ArgParser::parse(const std::vector<std::string>& args) {
       return Status::ok();
     }
     if (a.rfind("--", 0) != 0)
-      return Status::invalidArgument(command_ + ": unexpected argument '" + a + "' (options start with --)");
+      return Status::invalidArgument(command_ + ": unexpected argument '" + a +
+                                     "' (options start with --)");
     std::string name = a.substr(2);
     std::optional<std::string> inline_value;
     if (auto eq = name.find('='); eq != std::string::npos) {
@@ -48,7 +49,8 @@ Status ArgParser::parse(const std::vector<std::string>& args) {
     if (values_.count(name) || flags_.count(name))
       return Status::invalidArgument(command_ + ": option --" + name + " given twice");
     if (o->is_flag) {
-      if (inline_value) return Status::invalidArgument(command_ + ": --" + name + " takes no value");
+      if (inline_value)
+        return Status::invalidArgument(command_ + ": --" + name + " takes no value");
       flags_[name] = true;
       continue;
     }
@@ -56,7 +58,8 @@ Status ArgParser::parse(const std::vector<std::string>& args) {
       values_[name] = *inline_value;
     } else {
       if (i + 1 >= args.size())
-        return Status::invalidArgument(command_ + ": option --" + name + " needs a value " + o->value_name);
+        return Status::invalidArgument(command_ + ": option --" + name + " needs a value " +
+                                       o->value_name);
       values_[name] = args[++i];
     }
   }
@@ -72,8 +75,10 @@ std::string ArgParser::help() const {
   for (const auto& o : options_) {
     std::string head = "  --" + o.name + (o.is_flag ? "" : " " + o.value_name);
     s << head;
-    if (head.size() < 28) s << std::string(28 - head.size(), ' ');
-    else s << "\n" << std::string(28, ' ');
+    if (head.size() < 28)
+      s << std::string(28 - head.size(), ' ');
+    else
+      s << "\n" << std::string(28, ' ');
     s << o.help;
     if (o.required) s << " (required)";
     if (o.default_value) s << " [default: " << *o.default_value << "]";
@@ -106,7 +111,8 @@ Result<int> ArgParser::getInt(const std::string& name, int min_value, int max_va
     return Status::invalidArgument("--" + name + ": '" + v + "' is not an integer");
   if (n < min_value || n > max_value)
     return Status::invalidArgument("--" + name + ": " + v + " is out of range [" +
-                                   std::to_string(min_value) + ", " + std::to_string(max_value) + "]");
+                                   std::to_string(min_value) + ", " + std::to_string(max_value) +
+                                   "]");
   return static_cast<int>(n);
 }
 
@@ -133,7 +139,8 @@ Status ArgParser::getSize(const std::string& name, int& w, int& h, bool require_
   if (x == std::string::npos || !parse(v.substr(0, x), w) || !parse(v.substr(x + 1), h))
     return Status::invalidArgument("--" + name + ": '" + v + "' is not of the form WxH (e.g. 9x7)");
   if (!require_odd) {
-    if (w < 1 || h < 1) return Status::invalidArgument("--" + name + ": sides must be >= 1, got " + v);
+    if (w < 1 || h < 1)
+      return Status::invalidArgument("--" + name + ": sides must be >= 1, got " + v);
     return Status::ok();
   }
   if (w < 1 || h < 1 || w % 2 == 0 || h % 2 == 0)

@@ -1,8 +1,8 @@
 // svslam disparity: dense disparity of one rectified pair, timed, written to files.
 #include <algorithm>
 #include <chrono>
-#include <optional>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,25 +22,31 @@ int runDisparity(const std::vector<std::string>& args) {
               "Computes the dense disparity of a rectified pair by census or SAD correlation with\n"
               "reverse correlation, sub-pixel refinement and a per-pixel sigma_d. Prints one JSON\n"
               "object: size, method, threads, median_ms of the computation alone, valid_fraction.");
-  p.addOption("left", "FILE", "left image (grey or colour, converted to grey); without --left and\n"
-              "                            --right the built-in synthetic pair (slanted plane + box, exact\n"
+  p.addOption("left", "FILE",
+              "left image (grey or colour, converted to grey); without --left and\n"
+              "                            --right the built-in synthetic pair (slanted plane + "
+              "box, exact\n"
               "                            ground truth) is used and scored");
   p.addOption("right", "FILE", "right image, same size as the left");
-  p.addOption("max-disp", "N", "one past the largest disparity searched, px (0 < N < width); required\n"
+  p.addOption("max-disp", "N",
+              "one past the largest disparity searched, px (0 < N < width); required\n"
               "                            with images, 64 for the synthetic pair");
   p.addOption("synthetic-size", "WxH", "size of the built-in synthetic pair", "640x480");
   p.addOption("seed", "N", "seed of the built-in synthetic pair's texture", "1");
   addStereoOptions(p);
   p.addOption("repeat", "K", "compute K times and report the median time (1..1000)", "1");
-  p.addOption("out", "FILE", "disparity output: .pfm (float, +inf invalid) or .png (uint16 = d*256, 0 invalid)");
+  p.addOption("out", "FILE",
+              "disparity output: .pfm (float, +inf invalid) or .png (uint16 = d*256, 0 invalid)");
   p.addOption("sigma", "FILE.pfm", "write sigma_d (px) as PFM, +inf where invalid");
   p.addOption("color", "FILE.png", "write a colour-mapped disparity picture");
   if (auto code = parseCommandLine(p, args)) return *code;
   auto fail = [](const Status& s) { return reportFailure("disparity", s); };
   const bool synthetic = !p.has("left") && !p.has("right");
   if (!synthetic && (!p.has("left") || !p.has("right")))
-    return fail(Status::invalidArgument("give both --left and --right (or neither, for the built-in synthetic pair)"));
-  if (!synthetic && !p.has("max-disp")) return fail(Status::invalidArgument("--max-disp is required with images"));
+    return fail(Status::invalidArgument(
+        "give both --left and --right (or neither, for the built-in synthetic pair)"));
+  if (!synthetic && !p.has("max-disp"))
+    return fail(Status::invalidArgument("--max-disp is required with images"));
   Result<int> max_disp = 64;
   if (p.has("max-disp")) max_disp = p.getInt("max-disp", -1000000, 1000000);
   if (!max_disp) return fail(max_disp.status());
@@ -122,9 +128,11 @@ int runDisparity(const std::vector<std::string>& args) {
       .add("rejected_lr_check", result.stats.lr_inconsistent);
   if (truth) {
     j.add("source", "synthetic");
-    auto m = evaluateDisparity(result.disparity_px.cview(), truth->gt_disparity_px.cview(), truth->nonocc_mask.cview());
+    auto m = evaluateDisparity(result.disparity_px.cview(), truth->gt_disparity_px.cview(),
+                               truth->nonocc_mask.cview());
     if (m) {
-      j.add("synthetic_bad1_valid_pct", m->bad1_valid_pct).add("synthetic_density_pct", m->density_pct)
+      j.add("synthetic_bad1_valid_pct", m->bad1_valid_pct)
+          .add("synthetic_density_pct", m->density_pct)
           .add("synthetic_mae_valid_px", m->mae_valid_px);
     }
   }

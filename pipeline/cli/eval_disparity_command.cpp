@@ -25,14 +25,15 @@ std::string metricsFields(const DisparityMetrics& m) {
 }  // namespace
 
 int runEvalDisparity(const std::vector<std::string>& args) {
-  ArgParser p("eval-disparity",
-              "Scores a disparity map against ground truth: bad>0.5/1/2/3 px among valid pixels and\n"
-              "with invalid pixels counted as bad, density, mean absolute error. The map is read\n"
-              "from --disp, or computed with the stereo options below from the case's images.\n"
-              "Cases: --dataset DIR[,DIR...] recognises Middlebury v2 (imL/imR/groundtruth/info.txt),\n"
-              "Middlebury 2006 (*L, *R, *GT.png) and KITTI stereo (image_0, image_1, disp_noc)\n"
-              "folders; or give --gt (and --left/--right to compute) explicitly. With several\n"
-              "datasets the JSON holds one entry per case and the means.");
+  ArgParser p(
+      "eval-disparity",
+      "Scores a disparity map against ground truth: bad>0.5/1/2/3 px among valid pixels and\n"
+      "with invalid pixels counted as bad, density, mean absolute error. The map is read\n"
+      "from --disp, or computed with the stereo options below from the case's images.\n"
+      "Cases: --dataset DIR[,DIR...] recognises Middlebury v2 (imL/imR/groundtruth/info.txt),\n"
+      "Middlebury 2006 (*L, *R, *GT.png) and KITTI stereo (image_0, image_1, disp_noc)\n"
+      "folders; or give --gt (and --left/--right to compute) explicitly. With several\n"
+      "datasets the JSON holds one entry per case and the means.");
   p.addOption("dataset", "DIR[,DIR...]", "ground-truth case folder(s)");
   p.addOption("mask-kind", "nonocc|all|disc", "which mask of the dataset to evaluate on", "nonocc");
   p.addOption("frame", "NAME", "KITTI frame file name (default: the first in image_0)");
@@ -41,7 +42,8 @@ int runEvalDisparity(const std::vector<std::string>& args) {
   p.addOption("mask", "FILE", "evaluation mask (255 = evaluate)");
   p.addOption("left", "FILE", "left image (to compute the disparity with --gt)");
   p.addOption("right", "FILE", "right image (to compute the disparity with --gt)");
-  p.addOption("disp", "FILE", "disparity to score instead of computing one (.pfm, or .png / --disp-scale)");
+  p.addOption("disp", "FILE",
+              "disparity to score instead of computing one (.pfm, or .png / --disp-scale)");
   p.addOption("disp-scale", "S", "value per pixel of disparity of a .png --disp", "256");
   p.addOption("max-disp", "N", "one past the largest disparity searched (default: the case's)");
   addStereoOptions(p);
@@ -74,8 +76,10 @@ int runEvalDisparity(const std::vector<std::string>& args) {
     return fail(Status::invalidArgument("give --dataset DIR or --gt FILE (see --help)"));
   }
   const bool given = p.has("disp");
-  if (given && cases.size() != 1) return fail(Status::invalidArgument("--disp scores exactly one case"));
-  if (p.has("out") && cases.size() != 1) return fail(Status::invalidArgument("--out needs exactly one case"));
+  if (given && cases.size() != 1)
+    return fail(Status::invalidArgument("--disp scores exactly one case"));
+  if (p.has("out") && cases.size() != 1)
+    return fail(Status::invalidArgument("--out needs exactly one case"));
   if (p.has("out")) {
     if (Status s = checkOutputPath(p.get("out"), "out"); !s) return fail(s);
   }
@@ -88,7 +92,8 @@ int runEvalDisparity(const std::vector<std::string>& args) {
   if (!given) {
     for (const auto& c : cases) {
       if (c.left.empty() || c.right.empty())
-        return fail(Status::invalidArgument("to compute a disparity give --left and --right (or --disp to score a file)"));
+        return fail(Status::invalidArgument(
+            "to compute a disparity give --left and --right (or --disp to score a file)"));
       if (max_disp <= 0 && c.max_disp <= 0)
         return fail(Status::invalidArgument("--max-disp is needed for " + c.name));
     }
@@ -100,7 +105,8 @@ int runEvalDisparity(const std::vector<std::string>& args) {
   ThreadPoolExecutor executor(*threads);
 
   std::vector<std::string> entries;
-  double sum_bad1 = 0, sum_bad2 = 0, sum_bad3 = 0, sum_bad05 = 0, sum_density = 0, sum_bad1_all = 0, sum_mae = 0;
+  double sum_bad1 = 0, sum_bad2 = 0, sum_bad3 = 0, sum_bad05 = 0, sum_density = 0, sum_bad1_all = 0,
+         sum_mae = 0;
   for (const auto& info : cases) {
     auto loaded = loadCase(info, !given, p.get("mask-kind") == "nonocc");
     if (!loaded) return fail(loaded.status());
@@ -120,7 +126,8 @@ int runEvalDisparity(const std::vector<std::string>& args) {
       if (Status s = computeDisparity(*loaded, sp, executor, r, &ms); !s)
         return fail(Status(s.code(), info.name + ": " + s.message()));
       if (p.has("out")) {
-        if (Status s = writeDisparityOutputs(r, p.get("out"), "", "", sp.max_disp); !s) return fail(s);
+        if (Status s = writeDisparityOutputs(r, p.get("out"), "", "", sp.max_disp); !s)
+          return fail(s);
       }
       est = std::move(r.disparity_px);
     }
@@ -128,7 +135,10 @@ int runEvalDisparity(const std::vector<std::string>& args) {
     if (!m) return fail(Status(m.status().code(), info.name + ": " + m.status().message()));
     JsonObject j;
     j.add("case", info.name)
-        .add("mask", !info.mask.empty() ? info.mask : (p.get("mask-kind") == "nonocc" ? "nonocc derived from ground truth" : "none"));
+        .add("mask",
+             !info.mask.empty()
+                 ? info.mask
+                 : (p.get("mask-kind") == "nonocc" ? "nonocc derived from ground truth" : "none"));
     if (!given) j.add("max_disp", max_disp > 0 ? max_disp : info.max_disp).add("compute_ms", ms, 3);
     std::string e = j.str();
     e = e.substr(0, e.size() - 1) + ", " + metricsFields(*m) + "}";

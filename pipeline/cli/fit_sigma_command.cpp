@@ -20,8 +20,9 @@ namespace {
 // Appends (kappa, |d - gt|) of every valid, evaluated pixel of one case.
 // At most max_per_case samples are kept per case (an even, deterministic subsampling), so that
 // one large image does not decide the fit alone.
-Status collectSamples(const std::string& dir, const std::string& mask_kind, const DenseStereoParams& params,
-                      Executor& ex, std::size_t max_per_case, std::vector<float>& kappa, std::vector<float>& err) {
+Status collectSamples(const std::string& dir, const std::string& mask_kind,
+                      const DenseStereoParams& params, Executor& ex, std::size_t max_per_case,
+                      std::vector<float>& kappa, std::vector<float>& err) {
   auto info = io::findStereoGtCase(dir, mask_kind, "");
   if (!info) return info.status();
   auto c = loadCase(*info, true, mask_kind == "nonocc");
@@ -29,7 +30,8 @@ Status collectSamples(const std::string& dir, const std::string& mask_kind, cons
   DisparityResult r;
   DenseStereoParams sp = params;
   sp.max_disp = info->max_disp;
-  if (Status s = computeDisparity(*c, sp, ex, r, nullptr); !s) return Status(s.code(), info->name + ": " + s.message());
+  if (Status s = computeDisparity(*c, sp, ex, r, nullptr); !s)
+    return Status(s.code(), info->name + ": " + s.message());
   std::vector<float> k_case, e_case;
   for (int y = 0; y < c->gt.height(); ++y)
     for (int x = 0; x < c->gt.width(); ++x) {
@@ -53,16 +55,18 @@ Status collectSamples(const std::string& dir, const std::string& mask_kind, cons
 }  // namespace
 
 int runFitSigma(const std::vector<std::string>& args) {
-  ArgParser p("fit-sigma",
-              "Fits the table kappa -> sigma_d (seed 001 fig. 3) on ground-truth cases: pixels are\n"
-              "grouped by peak curvature kappa into equal-count bins and sigma is the 68.27th\n"
-              "percentile of |d - d_true| in each bin (made non-increasing). Reports the share of\n"
-              "errors inside one sigma on the training cases and on held-apart cases.");
+  ArgParser p(
+      "fit-sigma",
+      "Fits the table kappa -> sigma_d (seed 001 fig. 3) on ground-truth cases: pixels are\n"
+      "grouped by peak curvature kappa into equal-count bins and sigma is the 68.27th\n"
+      "percentile of |d - d_true| in each bin (made non-increasing). Reports the share of\n"
+      "errors inside one sigma on the training cases and on held-apart cases.");
   p.addOption("train", "DIR[,DIR...]", "ground-truth case folders to fit on", std::nullopt, true);
   p.addOption("holdout", "DIR[,DIR...]", "held-apart case folders to check the fit on");
   p.addOption("mask-kind", "nonocc|all|disc", "evaluation mask of the cases", "nonocc");
   p.addOption("bins", "N", "number of curvature bins (2..200)", "16");
-  p.addOption("samples-per-case", "N", "at most N pixels per case, evenly subsampled (1000..10000000)", "100000");
+  p.addOption("samples-per-case", "N",
+              "at most N pixels per case, evenly subsampled (1000..10000000)", "100000");
   p.addOption("out", "FILE", "write the model (lines 'kappa sigma_px'), usable with --sigma-model");
   addStereoOptions(p);
   if (auto code = parseCommandLine(p, args)) return *code;
@@ -80,10 +84,12 @@ int runFitSigma(const std::vector<std::string>& args) {
 
   std::vector<float> k_train, e_train, k_hold, e_hold;
   for (const auto& dir : splitList(p.get("train")))
-    if (Status s = collectSamples(dir, p.get("mask-kind"), *params, ex, cap, k_train, e_train); !s) return fail(s);
+    if (Status s = collectSamples(dir, p.get("mask-kind"), *params, ex, cap, k_train, e_train); !s)
+      return fail(s);
   if (p.has("holdout"))
     for (const auto& dir : splitList(p.get("holdout")))
-      if (Status s = collectSamples(dir, p.get("mask-kind"), *params, ex, cap, k_hold, e_hold); !s) return fail(s);
+      if (Status s = collectSamples(dir, p.get("mask-kind"), *params, ex, cap, k_hold, e_hold); !s)
+        return fail(s);
   auto model = fitSigmaModel(k_train, e_train, *bins);
   if (!model) return fail(model.status());
   if (p.has("out")) {
@@ -92,8 +98,9 @@ int runFitSigma(const std::vector<std::string>& args) {
     {
       std::ofstream f(tmp);
       if (!f) return fail(Status::ioError("cannot write " + path));
-      f << "# svslam sigma model: kappa (cost units / px / px^2) sigma_d (px); method " << toString(params->cost)
-        << ", window " << params->window_w << "x" << params->window_h << "\n";
+      f << "# svslam sigma model: kappa (cost units / px / px^2) sigma_d (px); method "
+        << toString(params->cost) << ", window " << params->window_w << "x" << params->window_h
+        << "\n";
       char line[64];
       for (std::size_t i = 0; i < model->curvature.size(); ++i) {
         std::snprintf(line, sizeof line, "%.6g %.6g\n", model->curvature[i], model->sigma_px[i]);
@@ -109,7 +116,8 @@ int runFitSigma(const std::vector<std::string>& args) {
   std::string knots = "[";
   for (std::size_t i = 0; i < model->curvature.size(); ++i) {
     char buf[64];
-    std::snprintf(buf, sizeof buf, "%s[%.6g, %.6g]", i ? ", " : "", model->curvature[i], model->sigma_px[i]);
+    std::snprintf(buf, sizeof buf, "%s[%.6g, %.6g]", i ? ", " : "", model->curvature[i],
+                  model->sigma_px[i]);
     knots += buf;
   }
   knots += "]";

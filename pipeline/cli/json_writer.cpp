@@ -9,10 +9,18 @@ std::string jsonEscape(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
       default:
         if (static_cast<unsigned char>(c) < 0x20) {
           char buf[8];
@@ -30,7 +38,9 @@ JsonObject& JsonObject::add(const std::string& key, const std::string& value) {
   fields_.emplace_back(key, jsonEscape(value));
   return *this;
 }
-JsonObject& JsonObject::add(const std::string& key, const char* value) { return add(key, std::string(value)); }
+JsonObject& JsonObject::add(const std::string& key, const char* value) {
+  return add(key, std::string(value));
+}
 JsonObject& JsonObject::add(const std::string& key, double value, int decimals) {
   if (!std::isfinite(value)) {
     fields_.emplace_back(key, "null");

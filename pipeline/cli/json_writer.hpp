@@ -14,7 +14,9 @@ class JsonObject {
   JsonObject& add(const std::string& key, const char* value);
   JsonObject& add(const std::string& key, double value, int decimals = 4);
   JsonObject& add(const std::string& key, std::int64_t value);
-  JsonObject& add(const std::string& key, int value) { return add(key, static_cast<std::int64_t>(value)); }
+  JsonObject& add(const std::string& key, int value) {
+    return add(key, static_cast<std::int64_t>(value));
+  }
   JsonObject& add(const std::string& key, bool value);
   JsonObject& addRaw(const std::string& key, const std::string& json);  // nested object/array
   std::string str() const;

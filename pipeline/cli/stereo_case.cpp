@@ -51,7 +51,8 @@ Status computeDisparity(const LoadedCase& c, DenseStereoParams params, Executor&
   const auto t0 = std::chrono::steady_clock::now();
   Status s = stereo.process(c.left.cview(), c.right.cview(), out, executor);
   if (compute_ms != nullptr)
-    *compute_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    *compute_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return s;
 }
 

@@ -14,8 +14,8 @@ namespace svslam::cli {
 struct LoadedCase {
   io::StereoGtCase info;
   ImageU8 left, right;
-  ImageF32 gt;    // px, +inf unknown
-  ImageU8 mask;   // empty = evaluate every known pixel
+  ImageF32 gt;   // px, +inf unknown
+  ImageU8 mask;  // empty = evaluate every known pixel
 };
 
 // Splits "a,b,c" into its non-empty parts.

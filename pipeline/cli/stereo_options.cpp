@@ -7,12 +7,14 @@ namespace svslam::cli {
 
 void addStereoOptions(ArgParser& p) {
   p.addOption("min-disp", "M", "smallest disparity searched, px (>= 0)", "0");
-  p.addOption("method", "census|sad", "matching cost: census (Hamming) or sad (8-bit intensities)", "census");
+  p.addOption("method", "census|sad", "matching cost: census (Hamming) or sad (8-bit intensities)",
+              "census");
   p.addOption("window", "WxH", "aggregation window, odd sides <= 31", "9x9");
   p.addOption("census", "WxH", "census window, odd sides, at most 64 neighbours", "9x7");
   p.addOption("prefilter", "none|mean|xsobel", "SAD prefilter (as OpenCV BM)", "xsobel");
   p.addOption("prefilter-cap", "N", "SAD prefilter clip, grey levels 1..63", "31");
-  p.addOption("uniqueness", "PCT", "best cost must beat the second best by PCT percent (0 = off)", "10");
+  p.addOption("uniqueness", "PCT", "best cost must beat the second best by PCT percent (0 = off)",
+              "10");
   p.addOption("texture", "T", "minimum mean |dI/dx| over the window, grey levels (0 = off)", "0");
   p.addFlag("no-lr-check", "disable reverse correlation (left-right consistency)");
   p.addOption("lr-max-diff", "N", "allowed |d_left - d_right| in the reverse correlation, px", "1");
@@ -20,7 +22,8 @@ void addStereoOptions(ArgParser& p) {
   p.addOption("backend", "auto|scalar|avx2|avx512|neon", "SIMD kernels", "auto");
   p.addOption("threads", "T", "threads used inside the stage (1..64)", "1");
   p.addOption("stripes", "S", "row stripes (tasks); default 4 x threads, 1 when threads = 1");
-  p.addOption("sigma-model", "FILE", "curvature -> sigma_d table: lines 'kappa sigma_px' (default: built-in fit)");
+  p.addOption("sigma-model", "FILE",
+              "curvature -> sigma_d table: lines 'kappa sigma_px' (default: built-in fit)");
 }
 
 Result<SigmaModel> loadSigmaModel(const std::string& path) {
@@ -37,7 +40,8 @@ Result<SigmaModel> loadSigmaModel(const std::string& path) {
     if (!(s >> k)) continue;
     std::string rest;
     if (!(s >> sg) || (s >> rest))
-      return Status::corruptData(path + ":" + std::to_string(line_no) + ": expected 'kappa sigma_px'");
+      return Status::corruptData(path + ":" + std::to_string(line_no) +
+                                 ": expected 'kappa sigma_px'");
     m.curvature.push_back(k);
     m.sigma_px.push_back(sg);
   }
@@ -52,11 +56,13 @@ Result<DenseStereoParams> stereoParamsFromArgs(const ArgParser& p, int max_disp)
   if (!min_disp) return min_disp.status();
   sp.min_disp = *min_disp;
   if (!parseMatchingCost(p.get("method"), sp.cost))
-    return Status::invalidArgument("--method: unknown method '" + p.get("method") + "' (use census or sad)");
+    return Status::invalidArgument("--method: unknown method '" + p.get("method") +
+                                   "' (use census or sad)");
   if (Status s = p.getSize("window", sp.window_w, sp.window_h); !s) return s;
   if (Status s = p.getSize("census", sp.census_w, sp.census_h); !s) return s;
   if (!parseSadPrefilter(p.get("prefilter"), sp.prefilter))
-    return Status::invalidArgument("--prefilter: unknown prefilter '" + p.get("prefilter") + "' (use none, mean or xsobel)");
+    return Status::invalidArgument("--prefilter: unknown prefilter '" + p.get("prefilter") +
+                                   "' (use none, mean or xsobel)");
   auto cap = p.getInt("prefilter-cap", 1, 63);
   if (!cap) return cap.status();
   sp.prefilter_cap = *cap;

@@ -11,7 +11,9 @@ constexpr TimeNs kNsPerMs = 1000 * 1000;
 constexpr TimeNs kNsPerS = 1000 * 1000 * 1000;
 
 constexpr double nsToSeconds(TimeNs t_ns) { return static_cast<double>(t_ns) * 1e-9; }
-constexpr TimeNs secondsToNs(double t_s) { return static_cast<TimeNs>(t_s * 1e9 + (t_s >= 0 ? 0.5 : -0.5)); }
+constexpr TimeNs secondsToNs(double t_s) {
+  return static_cast<TimeNs>(t_s * 1e9 + (t_s >= 0 ? 0.5 : -0.5));
+}
 constexpr std::int64_t nsToUtime(TimeNs t_ns) { return t_ns / kNsPerUs; }
 
 }  // namespace svslam

@@ -14,7 +14,8 @@ ImageU8 nonOccludedMask(ImageView<const float> gt_px, float tolerance_px) {
     for (int x = 0; x < gt_px.width; ++x) {
       if (!std::isfinite(g[x]) || !(g[x] > 0.0f)) continue;
       const long xr = std::lround(x - g[x]);
-      if (xr >= 0 && xr < gt_px.width) zbuf[static_cast<std::size_t>(xr)] = std::max(zbuf[static_cast<std::size_t>(xr)], g[x]);
+      if (xr >= 0 && xr < gt_px.width)
+        zbuf[static_cast<std::size_t>(xr)] = std::max(zbuf[static_cast<std::size_t>(xr)], g[x]);
     }
     std::uint8_t* m = mask.row(y);
     for (int x = 0; x < gt_px.width; ++x) {

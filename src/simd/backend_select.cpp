@@ -60,18 +60,23 @@ const StereoKernels& kernels(Backend b) {
 
 const char* backendName(Backend b) {
   switch (b) {
-    case Backend::kAuto: return "auto";
-    case Backend::kScalar: return "scalar";
-    case Backend::kAvx2: return "avx2";
-    case Backend::kAvx512: return "avx512";
-    case Backend::kNeon: return "neon";
+    case Backend::kAuto:
+      return "auto";
+    case Backend::kScalar:
+      return "scalar";
+    case Backend::kAvx2:
+      return "avx2";
+    case Backend::kAvx512:
+      return "avx512";
+    case Backend::kNeon:
+      return "neon";
   }
   return "unknown";
 }
 
 bool parseBackend(const char* s, Backend& out) {
-  for (Backend b : {Backend::kAuto, Backend::kScalar, Backend::kAvx2, Backend::kAvx512,
-                    Backend::kNeon}) {
+  for (Backend b :
+       {Backend::kAuto, Backend::kScalar, Backend::kAvx2, Backend::kAvx512, Backend::kNeon}) {
     if (std::strcmp(s, backendName(b)) == 0) {
       out = b;
       return true;

@@ -43,8 +43,8 @@ struct StereoKernels {
   // Census transform of one row. `win` points at the top-left pixel of the window of x = 0
   // (i.e. pixel (x - win_w/2, y - win_h/2) of an image padded so every window is readable);
   // `stride` in bytes. Writes out[0 .. width). win_w, win_h odd, win_w * win_h - 1 <= 64.
-  void (*censusRow)(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
-                    int win_h, std::uint64_t* out);
+  void (*censusRow)(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w, int win_h,
+                    std::uint64_t* out);
 
   // One cost plane: cost[x] = popcount(left[x] ^ right[x - d]) for x in [0, width).
   // Precondition: right is readable at indices [-d, width - d).

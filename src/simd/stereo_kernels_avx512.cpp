@@ -33,8 +33,10 @@ inline void transposeStore256(const __m256i p[8], std::uint64_t* out) {
   w[6] = _mm256_unpacklo_epi32(u3, u7);
   w[7] = _mm256_unpackhi_epi32(u3, u7);
   for (int m = 0; m < 8; m += 2) {
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + 2 * m), _mm256_permute2x128_si256(w[m], w[m + 1], 0x20));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + 16 + 2 * m), _mm256_permute2x128_si256(w[m], w[m + 1], 0x31));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + 2 * m),
+                        _mm256_permute2x128_si256(w[m], w[m + 1], 0x20));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + 16 + 2 * m),
+                        _mm256_permute2x128_si256(w[m], w[m + 1], 0x31));
   }
 }
 
@@ -62,11 +64,13 @@ void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int wi
       __m256i acc = _mm256_setzero_si256();
       const int k_end = std::min(n_off, 8 * j + 8);
       for (int k = 8 * j; k < k_end; ++k) {
-        const __m256i p = _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(win + off[k] + x)), flip);
+        const __m256i p = _mm256_xor_si256(
+            _mm256_loadu_si256(reinterpret_cast<const __m256i*>(win + off[k] + x)), flip);
         acc = _mm256_sub_epi8(_mm256_add_epi8(acc, acc), _mm256_cmpgt_epi8(c, p));
       }
       // A partial plane still puts offset k at bit 63 - k: shift it up to the MSB.
-      for (int k = std::max(k_end, 8 * j); k < 8 * j + 8 && k_end > 8 * j; ++k) acc = _mm256_add_epi8(acc, acc);
+      for (int k = std::max(k_end, 8 * j); k < 8 * j + 8 && k_end > 8 * j; ++k)
+        acc = _mm256_add_epi8(acc, acc);
       planes[j] = acc;
     }
     transposeStore256(planes, out + x);
@@ -84,15 +88,17 @@ void censusCostRow(const std::uint64_t* left, const std::uint64_t* right, int wi
   for (; x + 16 <= width; x += 16) {
     __m256i pc[4];
     for (int q = 0; q < 4; ++q)
-      pc[q] = _mm256_popcnt_epi64(_mm256_xor_si256(
-          _mm256_loadu_si256(reinterpret_cast<const __m256i*>(left + x + 4 * q)),
-          _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + x + 4 * q))));
+      pc[q] = _mm256_popcnt_epi64(
+          _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(left + x + 4 * q)),
+                           _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + x + 4 * q))));
     // Each 64-bit lane holds a count <= 64: pack 64 -> 32 -> 16 -> 8 bits keeping pixel order.
-    const __m512i all = _mm512_inserti64x4(_mm512_castsi256_si512(_mm256_or_si256(pc[0], _mm256_slli_epi64(pc[1], 32))),
-                                           _mm256_or_si256(pc[2], _mm256_slli_epi64(pc[3], 32)), 1);
+    const __m512i all = _mm512_inserti64x4(
+        _mm512_castsi256_si512(_mm256_or_si256(pc[0], _mm256_slli_epi64(pc[1], 32))),
+        _mm256_or_si256(pc[2], _mm256_slli_epi64(pc[3], 32)), 1);
     // all (32-bit lanes): p0 p4 p1 p5 p2 p6 p3 p7 | p8 p12 p9 p13 p10 p14 p11 p15
     const __m512i order = _mm512_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7, 8, 10, 12, 14, 9, 11, 13, 15);
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(cost + x), _mm512_cvtepi32_epi8(_mm512_permutexvar_epi32(order, all)));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(cost + x),
+                     _mm512_cvtepi32_epi8(_mm512_permutexvar_epi32(order, all)));
   }
   if (x < width) scalarKernels().censusCostRow(left + x, right + x, width - x, d, cost + x);
 }
@@ -109,13 +115,15 @@ void sadCostRow(const std::uint8_t* left, const std::uint8_t* right, int width, 
   if (x < width) scalarKernels().sadCostRow(left + x, right + x, width - x, d, cost + x);
 }
 
-void addSubRow(std::uint16_t* acc, const std::uint8_t* add, const std::uint8_t* sub, std::size_t n) {
+void addSubRow(std::uint16_t* acc, const std::uint8_t* add, const std::uint8_t* sub,
+               std::size_t n) {
   std::size_t j = 0;
   for (; j < n; j += 32) {
     const __mmask32 m = tailMask32(static_cast<int>(n - j));
     __m512i v = _mm512_add_epi16(_mm512_maskz_loadu_epi16(m, acc + j),
                                  _mm512_cvtepu8_epi16(_mm256_maskz_loadu_epi8(m, add + j)));
-    if (sub != nullptr) v = _mm512_sub_epi16(v, _mm512_cvtepu8_epi16(_mm256_maskz_loadu_epi8(m, sub + j)));
+    if (sub != nullptr)
+      v = _mm512_sub_epi16(v, _mm512_cvtepu8_epi16(_mm256_maskz_loadu_epi8(m, sub + j)));
     _mm512_mask_storeu_epi16(acc + j, m, v);
   }
 }
@@ -129,7 +137,8 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
     __m256i s1 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in + x + 16));
     for (int k = 1; k < win_w; ++k) {
       s0 = _mm256_add_epi16(s0, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in + x + k)));
-      s1 = _mm256_add_epi16(s1, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in + x + 16 + k)));
+      s1 = _mm256_add_epi16(s1,
+                            _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in + x + 16 + k)));
     }
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x), s0);
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x + 16), s1);
@@ -139,8 +148,8 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
 
 // The left-image state of 32 columns stays in registers across the planes of a block; updates
 // are branch-free blends. The ragged end goes through the scalar reference on a sub-range.
-void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0,
-                   int width, int d0, const WtaRowState& s) {
+void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int width,
+                   int d0, const WtaRowState& s) {
   std::uint16_t* const s_best = s.best;
   std::int16_t* const s_bidx = s.bidx;
   std::uint16_t* const s_second = s.second;
@@ -156,9 +165,10 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
     __m512i best, bidx, second, cm, cp, pm1, pm2, prev;
   };
   auto load = [&](int x) {
-    return Lanes{_mm512_loadu_si512(s_best + x), _mm512_loadu_si512(s_bidx + x), _mm512_loadu_si512(s_second + x),
-                 _mm512_loadu_si512(s_cm + x),   _mm512_loadu_si512(s_cp + x),   _mm512_loadu_si512(s_pm1 + x),
-                 _mm512_loadu_si512(s_pm2 + x),  _mm512_loadu_si512(agg - stride + x)};
+    return Lanes{_mm512_loadu_si512(s_best + x),   _mm512_loadu_si512(s_bidx + x),
+                 _mm512_loadu_si512(s_second + x), _mm512_loadu_si512(s_cm + x),
+                 _mm512_loadu_si512(s_cp + x),     _mm512_loadu_si512(s_pm1 + x),
+                 _mm512_loadu_si512(s_pm2 + x),    _mm512_loadu_si512(agg - stride + x)};
   };
   auto store = [&](int x, const Lanes& l) {
     _mm512_storeu_si512(s_best + x, l.best);
@@ -173,9 +183,11 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
   // that decide the blends read the previous state but do not feed back into each other.
   auto step = [&](Lanes& l, const __m512i c, const __m512i vi, const __m512i vi_minus1) {
     const __mmask32 m_new = _mm512_cmplt_epu16_mask(c, l.best);
-    const __mmask32 m_adj = _mm512_mask_cmpeq_epi16_mask(static_cast<__mmask32>(~m_new), l.bidx, vi_minus1);
+    const __mmask32 m_adj =
+        _mm512_mask_cmpeq_epi16_mask(static_cast<__mmask32>(~m_new), l.bidx, vi_minus1);
     const __mmask32 keep = static_cast<__mmask32>(~(m_new | m_adj));
-    l.second = _mm512_mask_mov_epi16(_mm512_mask_min_epu16(l.second, keep, l.second, c), m_new, l.pm2);
+    l.second =
+        _mm512_mask_mov_epi16(_mm512_mask_min_epu16(l.second, keep, l.second, c), m_new, l.pm2);
     l.best = _mm512_min_epu16(l.best, c);
     l.bidx = _mm512_mask_mov_epi16(l.bidx, m_new, vi);
     l.cm = _mm512_mask_mov_epi16(l.cm, m_new, l.prev);
@@ -189,7 +201,8 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
   for (; x + 32 <= width; x += 32) {
     Lanes l = load(x);
     for (int p = 0; p < n_planes; ++p)
-      step(l, _mm512_loadu_si512(agg + p * stride + x), _mm512_set1_epi16(static_cast<short>(i0 + p)),
+      step(l, _mm512_loadu_si512(agg + p * stride + x),
+           _mm512_set1_epi16(static_cast<short>(i0 + p)),
            _mm512_set1_epi16(static_cast<short>(i0 + p - 1)));
     store(x, l);
   }
@@ -211,9 +224,12 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
       const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + xr));
       const __m256i br = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(s_best_r + xr));
       const __mmask16 upd = _mm256_cmplt_epu16_mask(c, br);
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(s_best_r + xr), _mm256_mask_mov_epi16(br, upd, c));
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(s_idx_r + xr),
-                          _mm256_mask_mov_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(s_idx_r + xr)), upd, vi));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(s_best_r + xr),
+                          _mm256_mask_mov_epi16(br, upd, c));
+      _mm256_storeu_si256(
+          reinterpret_cast<__m256i*>(s_idx_r + xr),
+          _mm256_mask_mov_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(s_idx_r + xr)),
+                                upd, vi));
     }
     for (; xr < n_right; ++xr) {
       if (a[xr] < s_best_r[xr]) {
@@ -227,8 +243,8 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
 }  // namespace
 
 const StereoKernels& avx512Kernels() {
-  static const StereoKernels k{Backend::kAvx512, "avx512", censusRow, censusCostRow, sadCostRow,
-                               addSubRow,         boxRow,   wtaUpdateRows};
+  static const StereoKernels k{Backend::kAvx512, "avx512",  censusRow, censusCostRow,
+                               sadCostRow,       addSubRow, boxRow,    wtaUpdateRows};
   return k;
 }
 

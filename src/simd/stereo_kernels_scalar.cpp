@@ -38,7 +38,8 @@ void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int wi
 void censusCostRow(const std::uint64_t* left, const std::uint64_t* right, int width, int d,
                    std::uint8_t* cost) {
   const std::uint64_t* r = right - d;
-  for (int x = 0; x < width; ++x) cost[x] = static_cast<std::uint8_t>(__builtin_popcountll(left[x] ^ r[x]));
+  for (int x = 0; x < width; ++x)
+    cost[x] = static_cast<std::uint8_t>(__builtin_popcountll(left[x] ^ r[x]));
 }
 
 void sadCostRow(const std::uint8_t* left, const std::uint8_t* right, int width, int d,
@@ -47,11 +48,13 @@ void sadCostRow(const std::uint8_t* left, const std::uint8_t* right, int width, 
   for (int x = 0; x < width; ++x) cost[x] = static_cast<std::uint8_t>(std::abs(left[x] - r[x]));
 }
 
-void addSubRow(std::uint16_t* acc, const std::uint8_t* add, const std::uint8_t* sub, std::size_t n) {
+void addSubRow(std::uint16_t* acc, const std::uint8_t* add, const std::uint8_t* sub,
+               std::size_t n) {
   if (sub == nullptr) {
     for (std::size_t j = 0; j < n; ++j) acc[j] = static_cast<std::uint16_t>(acc[j] + add[j]);
   } else {
-    for (std::size_t j = 0; j < n; ++j) acc[j] = static_cast<std::uint16_t>(acc[j] + add[j] - sub[j]);
+    for (std::size_t j = 0; j < n; ++j)
+      acc[j] = static_cast<std::uint16_t>(acc[j] + add[j] - sub[j]);
   }
 }
 
@@ -63,8 +66,8 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
   }
 }
 
-void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0,
-                   int width, int d0, const WtaRowState& s) {
+void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int width,
+                   int d0, const WtaRowState& s) {
   for (int p = 0; p < n_planes; ++p) {
     const int i = i0 + p;
     const std::uint16_t* a = agg + p * stride;
@@ -98,8 +101,8 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
 }  // namespace
 
 const StereoKernels& scalarKernels() {
-  static const StereoKernels k{Backend::kScalar, "scalar", censusRow, censusCostRow, sadCostRow,
-                               addSubRow,         boxRow,   wtaUpdateRows};
+  static const StereoKernels k{Backend::kScalar, "scalar",  censusRow, censusCostRow,
+                               sadCostRow,       addSubRow, boxRow,    wtaUpdateRows};
   return k;
 }
 

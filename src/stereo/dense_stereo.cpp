@@ -37,7 +37,7 @@ struct DenseStereo::Stripe {
   DenseStereoStats stats;
 
   simd::WtaRowState state() {
-    return {best.data(), bidx.data(), second.data(), cm.data(), cp.data(),
+    return {best.data(), bidx.data(), second.data(), cm.data(),   cp.data(),
             pm1.data(),  pm2.data(),  best_r.data(), idx_r.data()};
   }
 };
@@ -53,8 +53,9 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
     return;
   }
   if (params_.max_disp >= width) {
-    init_status_ = Status::invalidArgument("max_disp (" + std::to_string(params_.max_disp) +
-                                           ") must be < image width (" + std::to_string(width) + ")");
+    init_status_ =
+        Status::invalidArgument("max_disp (" + std::to_string(params_.max_disp) +
+                                ") must be < image width (" + std::to_string(width) + ")");
     return;
   }
   k_ = &simd::kernels(params_.backend);
@@ -62,24 +63,28 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
     // sigma_d for every possible parabola curvature numerator v = c- + c+ - 2 c0 (an integer up
     // to twice the largest aggregated cost): one table look-up per pixel instead of a search.
     const int max_denom = 2 * params_.maxPixelCost() * params_.window_w * params_.window_h;
-    const float inv_area = static_cast<float>(1.0 / (static_cast<double>(params_.window_w) * params_.window_h));
+    const float inv_area =
+        static_cast<float>(1.0 / (static_cast<double>(params_.window_w) * params_.window_h));
     sigma_by_denom_.resize(static_cast<std::size_t>(max_denom) + 1);
     for (int v = 0; v <= max_denom; ++v) {
-      sigma_by_denom_[static_cast<std::size_t>(v)] = params_.sigma_model.sigmaFor(static_cast<float>(v) * inv_area);
+      sigma_by_denom_[static_cast<std::size_t>(v)] =
+          params_.sigma_model.sigmaFor(static_cast<float>(v) * inv_area);
     }
   }
   const int D = params_.numDisp();
   const bool census = params_.cost == MatchingCost::kCensus;
   int need = 1;  // the texture gradient reads x +- 1
   if (census) need = std::max({need, params_.census_w / 2, params_.census_h / 2});
-  if (!census && params_.prefilter == SadPrefilter::kMeanRemoval) need = std::max(need, params_.prefilter_size / 2);
+  if (!census && params_.prefilter == SadPrefilter::kMeanRemoval)
+    need = std::max(need, params_.prefilter_size / 2);
   pad_x_ = need;
   pad_y_ = need;
   padded_left_.resize(width + 2 * pad_x_, height + 2 * pad_y_);
   padded_right_.resize(width + 2 * pad_x_, height + 2 * pad_y_);
   right_pad_ = static_cast<int>(roundUp(params_.max_disp, 8));
   row_stride_ = roundUp(right_pad_ + width + 8, 64);
-  const std::size_t rows_n = static_cast<std::size_t>(row_stride_) * static_cast<std::size_t>(height);
+  const std::size_t rows_n =
+      static_cast<std::size_t>(row_stride_) * static_cast<std::size_t>(height);
   if (census) {
     census_left_.resize(rows_n);
     census_right_.resize(rows_n);
@@ -101,9 +106,9 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
     st->ring_row.assign(static_cast<std::size_t>(st->ring_size), -1);
     st->colsum.resize(static_cast<std::size_t>(D) * static_cast<std::size_t>(cost_stride_));
     const std::size_t wn = static_cast<std::size_t>(roundUp(width, 64));
-    st->agg.resize(static_cast<std::size_t>(kPlaneBlock + 1) * static_cast<std::size_t>(agg_stride_));
-    for (auto* b : {&st->best, &st->second, &st->cm, &st->cp, &st->pm1,
-                    &st->pm2, &st->best_r})
+    st->agg.resize(static_cast<std::size_t>(kPlaneBlock + 1) *
+                   static_cast<std::size_t>(agg_stride_));
+    for (auto* b : {&st->best, &st->second, &st->cm, &st->cp, &st->pm1, &st->pm2, &st->best_r})
       b->resize(wn);
     st->bidx.resize(wn);
     st->idx_r.resize(wn);
@@ -139,14 +144,19 @@ void DenseStereo::prepareRows(Stripe& s) {
                               static_cast<std::size_t>(right_pad_);
       if (census) {
         std::uint64_t* out = (side == 0 ? census_left_ : census_right_).data() + off;
-        const std::uint8_t* win = center - (params_.census_h / 2) * padded.stride() - params_.census_w / 2;
+        const std::uint8_t* win =
+            center - (params_.census_h / 2) * padded.stride() - params_.census_w / 2;
         k_->censusRow(win, padded.stride(), width_, params_.census_w, params_.census_h, out);
         if (side == 1) std::fill(out - right_pad_, out, out[0]);
       } else {
         std::uint8_t* out = (side == 0 ? filt_left_ : filt_right_).data() + off;
         switch (params_.prefilter) {
-          case SadPrefilter::kNone: copyRow(center, width_, out); break;
-          case SadPrefilter::kXSobel: xSobelRow(center, padded.stride(), width_, params_.prefilter_cap, out); break;
+          case SadPrefilter::kNone:
+            copyRow(center, width_, out);
+            break;
+          case SadPrefilter::kXSobel:
+            xSobelRow(center, padded.stride(), width_, params_.prefilter_cap, out);
+            break;
           case SadPrefilter::kMeanRemoval:
             meanRemovalRow(center, padded.stride(), width_, params_.prefilter_size,
                            params_.prefilter_cap, scratch.data(), out);
@@ -160,8 +170,9 @@ void DenseStereo::prepareRows(Stripe& s) {
 
 std::uint8_t* DenseStereo::ringPlane(Stripe& s, int row, int i) const {
   const std::size_t slot = static_cast<std::size_t>(row % s.ring_size);
-  return s.ring.data() + (slot * static_cast<std::size_t>(params_.numDisp()) + static_cast<std::size_t>(i)) *
-                             static_cast<std::size_t>(ring_stride_);
+  return s.ring.data() +
+         (slot * static_cast<std::size_t>(params_.numDisp()) + static_cast<std::size_t>(i)) *
+             static_cast<std::size_t>(ring_stride_);
 }
 
 void DenseStereo::computeCostPlane(Stripe& s, int row, int i) const {
@@ -169,9 +180,11 @@ void DenseStereo::computeCostPlane(Stripe& s, int row, int i) const {
                           static_cast<std::size_t>(right_pad_);
   const int d = params_.min_disp + i;
   if (params_.cost == MatchingCost::kCensus)
-    k_->censusCostRow(census_left_.data() + off, census_right_.data() + off, width_, d, ringPlane(s, row, i));
+    k_->censusCostRow(census_left_.data() + off, census_right_.data() + off, width_, d,
+                      ringPlane(s, row, i));
   else
-    k_->sadCostRow(filt_left_.data() + off, filt_right_.data() + off, width_, d, ringPlane(s, row, i));
+    k_->sadCostRow(filt_left_.data() + off, filt_right_.data() + off, width_, d,
+                   ringPlane(s, row, i));
 }
 
 void DenseStereo::ensureCostRow(Stripe& s, int row) const {
@@ -200,12 +213,15 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
   // Central-difference gradient |I(x+1) - I(x-1)| of left row r, for the texture filter.
   auto gradRow = [&](int r) {
     const std::uint8_t* p = padded_left_.row(r + pad_y_) + pad_x_;
-    for (int x = 0; x < W; ++x) s.grad[static_cast<std::size_t>(x)] = static_cast<std::uint8_t>(std::abs(p[x + 1] - p[x - 1]));
+    for (int x = 0; x < W; ++x)
+      s.grad[static_cast<std::size_t>(x)] =
+          static_cast<std::uint8_t>(std::abs(p[x + 1] - p[x - 1]));
   };
   auto texAdd = [&](int r, int sign) {
     gradRow(r);
     for (int x = 0; x < W; ++x)
-      s.tex_col[static_cast<std::size_t>(x)] += static_cast<std::uint32_t>(sign * s.grad[static_cast<std::size_t>(x)]);
+      s.tex_col[static_cast<std::size_t>(x)] +=
+          static_cast<std::uint32_t>(sign * s.grad[static_cast<std::size_t>(x)]);
   };
 
   for (int y = s.y0; y < s.y1; ++y) {
@@ -221,7 +237,9 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
         const int rr = clampRow(r, height_);
         ensureCostRow(s, rr);
         for (int i = 0; i < D; ++i)
-          k_->addSubRow(s.colsum.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_) + kXo,
+          k_->addSubRow(s.colsum.data() +
+                            static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_) +
+                            kXo,
                         ringPlane(s, rr, i), nullptr, static_cast<std::size_t>(W));
         if (use_texture) texAdd(rr, 1);
       }
@@ -240,27 +258,33 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       const int n = std::min(kPlaneBlock, D - i0);
       for (int p = 0; p < n; ++p) {
         const int i = i0 + p;
-        std::uint16_t* col = s.colsum.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_);
+        std::uint16_t* col =
+            s.colsum.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_);
         if (y != s.y0) {
           if (fresh_new) computeCostPlane(s, new_row, i);
-          k_->addSubRow(col + kXo, ringPlane(s, new_row, i), ringPlane(s, old_row, i), static_cast<std::size_t>(W));
+          k_->addSubRow(col + kXo, ringPlane(s, new_row, i), ringPlane(s, old_row, i),
+                        static_cast<std::size_t>(W));
         }
         std::fill(col + kXo - rw, col + kXo, col[kXo]);
         std::fill(col + kXo + W, col + kXo + W + rw, col[kXo + W - 1]);
-        std::uint16_t* agg = s.agg.data() + static_cast<std::size_t>(p + 1) * static_cast<std::size_t>(agg_stride_);
+        std::uint16_t* agg =
+            s.agg.data() + static_cast<std::size_t>(p + 1) * static_cast<std::size_t>(agg_stride_);
         k_->boxRow(col + kXo - rw, W, params_.window_w, agg);
         std::fill(agg, agg + std::min(W, d0 + i), kImpossible);  // x - d < 0: no match possible
       }
       k_->wtaUpdateRows(s.agg.data() + agg_stride_, agg_stride_, n, i0, W, d0, st);
       // The last plane of this block is the "previous plane" of the next block.
-      std::memcpy(s.agg.data(), s.agg.data() + static_cast<std::size_t>(n) * static_cast<std::size_t>(agg_stride_),
-                  static_cast<std::size_t>(W) * sizeof(std::uint16_t));
+      std::memcpy(
+          s.agg.data(),
+          s.agg.data() + static_cast<std::size_t>(n) * static_cast<std::size_t>(agg_stride_),
+          static_cast<std::size_t>(W) * sizeof(std::uint16_t));
     }
     if (fresh_new) s.ring_row[static_cast<std::size_t>(new_row % s.ring_size)] = new_row;
     if (use_texture) {
       // Horizontal box of the texture column sums, borders replicated.
       std::uint32_t sum = 0;
-      for (int k = -rw; k <= rw; ++k) sum += s.tex_col[static_cast<std::size_t>(std::clamp(k, 0, W - 1))];
+      for (int k = -rw; k <= rw; ++k)
+        sum += s.tex_col[static_cast<std::size_t>(std::clamp(k, 0, W - 1))];
       for (int x = 0; x < W; ++x) {
         if (x > 0) {
           sum += s.tex_col[static_cast<std::size_t>(std::min(x + rw, W - 1))];
@@ -277,7 +301,7 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
     // candidate, texture, uniqueness, reverse correlation) is the pixel's verdict.
     const bool subpixel = params_.subpixel;
     const float* const sigma_table = sigma_by_denom_.data();
-  const std::uint64_t uniq_factor = 100u + static_cast<std::uint32_t>(params_.uniqueness_pct);
+    const std::uint64_t uniq_factor = 100u + static_cast<std::uint32_t>(params_.uniqueness_pct);
     for (int x = 0; x < W; ++x) {
       const std::size_t ux = static_cast<std::size_t>(x);
       const int idx = s.bidx[ux];
@@ -287,14 +311,17 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       const bool low_texture = use_texture && static_cast<double>(s.tex_row[ux]) < texture_limit;
       // No competitor at all (fewer than 3 candidates, at the left border) cannot be verified.
       const bool not_unique = params_.uniqueness_pct > 0 &&
-                              (second == kImpossible || static_cast<std::uint64_t>(second) * 100u <= best * uniq_factor);
+                              (second == kImpossible ||
+                               static_cast<std::uint64_t>(second) * 100u <= best * uniq_factor);
       const int xr = std::max(0, x - (d0 + idx));
       const int idr = s.idx_r[static_cast<std::size_t>(xr)];
-      const bool lr_bad = params_.lr_check && (idr < 0 || std::abs(idr - idx) > params_.lr_max_diff);
+      const bool lr_bad =
+          params_.lr_check && (idr < 0 || std::abs(idr - idx) > params_.lr_max_diff);
       // First failing test, without branches: bit k set for test k. Counted in registers (an
       // array of counters in memory serialises consecutive pixels through store forwarding).
-      const unsigned failed = static_cast<unsigned>(no_candidate) | (static_cast<unsigned>(low_texture) << 1) |
-                              (static_cast<unsigned>(not_unique) << 2) | (static_cast<unsigned>(lr_bad) << 3);
+      const unsigned failed =
+          static_cast<unsigned>(no_candidate) | (static_cast<unsigned>(low_texture) << 1) |
+          (static_cast<unsigned>(not_unique) << 2) | (static_cast<unsigned>(lr_bad) << 3);
       n_no_candidate += static_cast<int>(failed & 1u);
       n_low_texture += static_cast<int>((failed & 3u) == 2u);
       n_not_unique += static_cast<int>((failed & 7u) == 4u);
@@ -305,7 +332,9 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       const int denom = cm + cp - 2 * static_cast<int>(best);
       const bool parabola = idx > 0 && idx + 1 < D && cp != kImpossible && denom > 0;
       const int safe_denom = parabola ? denom : 1;
-      const float delta = parabola && subpixel ? static_cast<float>(cm - cp) / static_cast<float>(2 * safe_denom) : 0.0f;
+      const float delta = parabola && subpixel
+                              ? static_cast<float>(cm - cp) / static_cast<float>(2 * safe_denom)
+                              : 0.0f;
       const bool valid = failed == 0;
       disp[x] = valid ? static_cast<float>(d0 + idx) + delta : inf;
       sig[x] = valid ? sigma_table[parabola ? std::min(denom, max_denom) : 0] : inf;
@@ -330,11 +359,13 @@ Status DenseStereo::process(ImageView<const std::uint8_t> left, ImageView<const 
                             DisparityResult& out, Executor& executor) {
   if (!init_status_) return init_status_;
   if (left.empty() || right.empty()) return Status::invalidArgument("empty input image");
-  if (left.width != width_ || left.height != height_ || right.width != width_ || right.height != height_)
+  if (left.width != width_ || left.height != height_ || right.width != width_ ||
+      right.height != height_)
     return Status::invalidArgument(
-        "image size mismatch: stage built for " + std::to_string(width_) + "x" + std::to_string(height_) +
-        ", got left " + std::to_string(left.width) + "x" + std::to_string(left.height) + " and right " +
-        std::to_string(right.width) + "x" + std::to_string(right.height));
+        "image size mismatch: stage built for " + std::to_string(width_) + "x" +
+        std::to_string(height_) + ", got left " + std::to_string(left.width) + "x" +
+        std::to_string(left.height) + " and right " + std::to_string(right.width) + "x" +
+        std::to_string(right.height));
   out.disparity_px.resize(width_, height_);
   out.sigma_d_px.resize(width_, height_);
   out.curvature.resize(width_, height_);
@@ -354,7 +385,8 @@ Status DenseStereo::process(ImageView<const std::uint8_t> left, ImageView<const 
     padImage(frame.right, padded_right_, y0, y1);
   });
   executor.parallelFor(n, [this](int t) { prepareRows(*stripes_[static_cast<std::size_t>(t)]); });
-  executor.parallelFor(n, [this, &frame](int t) { matchRows(*stripes_[static_cast<std::size_t>(t)], *frame.out); });
+  executor.parallelFor(
+      n, [this, &frame](int t) { matchRows(*stripes_[static_cast<std::size_t>(t)], *frame.out); });
 
   DenseStereoStats total;
   for (const auto& s : stripes_) {

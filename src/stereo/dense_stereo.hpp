@@ -55,10 +55,10 @@ struct DenseStereoParams {
   int max_disp = 64;        // one past the largest disparity searched, px; max - min in 1..1024
   int uniqueness_pct = 10;  // 0 disables; best must beat the second best by this many percent
   float texture_threshold = 0.0f;  // grey levels per px of mean |dI/dx|; 0 disables
-  bool lr_check = true;     // reverse correlation
-  int lr_max_diff = 1;      // px, >= 0, allowed |d_left - d_right|
-  bool subpixel = true;     // parabola fit; false gives integer disparities
-  int num_stripes = 1;      // row stripes processed as independent tasks, 1..256
+  bool lr_check = true;            // reverse correlation
+  int lr_max_diff = 1;             // px, >= 0, allowed |d_left - d_right|
+  bool subpixel = true;            // parabola fit; false gives integer disparities
+  int num_stripes = 1;             // row stripes processed as independent tasks, 1..256
   simd::Backend backend = simd::Backend::kAuto;
   SigmaModel sigma_model = SigmaModel::defaultCensus();
 
@@ -70,8 +70,8 @@ struct DenseStereoParams {
 };
 
 struct DenseStereoStats {
-  int valid = 0;              // pixels with a disparity
-  int no_candidate = 0;       // x < min_disp: no disparity can be searched
+  int valid = 0;         // pixels with a disparity
+  int no_candidate = 0;  // x < min_disp: no disparity can be searched
   int low_texture = 0;
   int not_unique = 0;
   int lr_inconsistent = 0;
@@ -120,7 +120,7 @@ class DenseStereo {
   int height_ = 0;
   int pad_x_ = 0;  // padding of the padded grey images
   int pad_y_ = 0;
-  int right_pad_ = 0;  // left padding (elements) of right census / prefiltered rows
+  int right_pad_ = 0;               // left padding (elements) of right census / prefiltered rows
   std::ptrdiff_t cost_stride_ = 0;  // elements per disparity plane
   std::ptrdiff_t ring_stride_ = 0;  // bytes per uint8 cost plane in the ring
   std::ptrdiff_t agg_stride_ = 0;   // elements per aggregated-cost row
@@ -128,7 +128,7 @@ class DenseStereo {
 
   ImageU8 padded_left_, padded_right_;
   AlignedBuffer<std::uint64_t> census_left_, census_right_;  // rows of stride row_stride_
-  AlignedBuffer<std::uint8_t> filt_left_, filt_right_;        // SAD rows of stride row_stride_
+  AlignedBuffer<std::uint8_t> filt_left_, filt_right_;       // SAD rows of stride row_stride_
   std::ptrdiff_t row_stride_ = 0;
   std::vector<std::unique_ptr<Stripe>> stripes_;
   std::vector<float> sigma_by_denom_;  // sigma_model at kappa = v / window area, v = 0 .. max

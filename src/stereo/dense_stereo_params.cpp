@@ -11,22 +11,34 @@ const char* toString(MatchingCost c) { return c == MatchingCost::kCensus ? "cens
 
 const char* toString(SadPrefilter p) {
   switch (p) {
-    case SadPrefilter::kNone: return "none";
-    case SadPrefilter::kMeanRemoval: return "mean";
-    case SadPrefilter::kXSobel: return "xsobel";
+    case SadPrefilter::kNone:
+      return "none";
+    case SadPrefilter::kMeanRemoval:
+      return "mean";
+    case SadPrefilter::kXSobel:
+      return "xsobel";
   }
   return "unknown";
 }
 
 bool parseMatchingCost(const std::string& s, MatchingCost& out) {
-  if (s == "census") { out = MatchingCost::kCensus; return true; }
-  if (s == "sad") { out = MatchingCost::kSad; return true; }
+  if (s == "census") {
+    out = MatchingCost::kCensus;
+    return true;
+  }
+  if (s == "sad") {
+    out = MatchingCost::kSad;
+    return true;
+  }
   return false;
 }
 
 bool parseSadPrefilter(const std::string& s, SadPrefilter& out) {
   for (SadPrefilter p : {SadPrefilter::kNone, SadPrefilter::kMeanRemoval, SadPrefilter::kXSobel}) {
-    if (s == toString(p)) { out = p; return true; }
+    if (s == toString(p)) {
+      out = p;
+      return true;
+    }
   }
   return false;
 }
@@ -47,7 +59,8 @@ Status DenseStereoParams::validate() const {
     if (census_w * census_h < 9) return bad("census window must be at least 3x3");
   } else {
     if (prefilter_cap < 1 || prefilter_cap > 63) return bad("prefilter_cap must be in 1..63");
-    if (prefilter == SadPrefilter::kMeanRemoval && (!odd(prefilter_size) || prefilter_size < 3 || prefilter_size > 21))
+    if (prefilter == SadPrefilter::kMeanRemoval &&
+        (!odd(prefilter_size) || prefilter_size < 3 || prefilter_size > 21))
       return bad("prefilter_size must be odd in 3..21");
   }
   if (!odd(window_w) || !odd(window_h) || window_w > 31 || window_h > 31)

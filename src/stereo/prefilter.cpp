@@ -10,13 +10,14 @@ void xSobelRow(const std::uint8_t* center, std::ptrdiff_t stride, int width, int
   const std::uint8_t* up = center - stride;
   const std::uint8_t* dn = center + stride;
   for (int x = 0; x < width; ++x) {
-    const int s = (up[x + 1] + 2 * center[x + 1] + dn[x + 1]) - (up[x - 1] + 2 * center[x - 1] + dn[x - 1]);
+    const int s =
+        (up[x + 1] + 2 * center[x + 1] + dn[x + 1]) - (up[x - 1] + 2 * center[x - 1] + dn[x - 1]);
     out[x] = static_cast<std::uint8_t>(std::clamp(s, -cap, cap) + cap);
   }
 }
 
-void meanRemovalRow(const std::uint8_t* center, std::ptrdiff_t stride, int width, int size,
-                    int cap, std::uint32_t* colsum, std::uint8_t* out) {
+void meanRemovalRow(const std::uint8_t* center, std::ptrdiff_t stride, int width, int size, int cap,
+                    std::uint32_t* colsum, std::uint8_t* out) {
   const int r = size / 2;
   const int n = width + size - 1;
   const std::uint8_t* top = center - r * stride - r;

@@ -14,8 +14,8 @@ void xSobelRow(const std::uint8_t* center, std::ptrdiff_t stride, int width, int
 
 // Mean removal: out = clamp(I(x,y) - round(mean of the size x size window), -cap, cap) + cap.
 // `colsum` is scratch of width + size - 1 entries.
-void meanRemovalRow(const std::uint8_t* center, std::ptrdiff_t stride, int width, int size,
-                    int cap, std::uint32_t* colsum, std::uint8_t* out);
+void meanRemovalRow(const std::uint8_t* center, std::ptrdiff_t stride, int width, int size, int cap,
+                    std::uint32_t* colsum, std::uint8_t* out);
 
 // Copy of a grey row: out[x] = center[x].
 void copyRow(const std::uint8_t* center, int width, std::uint8_t* out);

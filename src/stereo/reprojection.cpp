@@ -6,8 +6,10 @@
 namespace svslam {
 
 Status ReprojectionParams::validate() const {
-  if (!std::isfinite(sigma_uv_px) || sigma_uv_px < 0.0) return Status::invalidArgument("sigma_uv_px must be finite and >= 0");
-  if (!std::isfinite(min_disparity_px) || min_disparity_px <= 0.0) return Status::invalidArgument("min_disparity_px must be > 0");
+  if (!std::isfinite(sigma_uv_px) || sigma_uv_px < 0.0)
+    return Status::invalidArgument("sigma_uv_px must be finite and >= 0");
+  if (!std::isfinite(min_disparity_px) || min_disparity_px <= 0.0)
+    return Status::invalidArgument("min_disparity_px must be > 0");
   if (!(max_depth_m > 0.0)) return Status::invalidArgument("max_depth_m must be > 0");
   if (step_px < 1) return Status::invalidArgument("step_px must be >= 1");
   return Status::ok();
@@ -26,7 +28,8 @@ StereoPoint reprojectPixel(const StereoCalibration& calib, double u_px, double v
   J << b / d_px, 0.0, -du * b / d2,  //
       0.0, b / d_px, -dv * b / d2,   //
       0.0, 0.0, -f * b / d2;
-  const Eigen::Vector3d var(sigma_uv_px * sigma_uv_px, sigma_uv_px * sigma_uv_px, sigma_d_px * sigma_d_px);
+  const Eigen::Vector3d var(sigma_uv_px * sigma_uv_px, sigma_uv_px * sigma_uv_px,
+                            sigma_d_px * sigma_d_px);
   p.cov = J * var.asDiagonal() * J.transpose();
   p.u_px = static_cast<float>(u_px);
   p.v_px = static_cast<float>(v_px);
@@ -45,7 +48,8 @@ Status reprojectDisparity(ImageView<const float> disparity_px, ImageView<const f
     return Status::invalidArgument("disparity and sigma maps differ in size");
   if (disparity_px.width != calib.width || disparity_px.height != calib.height)
     return Status::invalidArgument("disparity map size differs from the calibration's image size");
-  const double min_d = std::max(params.min_disparity_px, calib.f_px * calib.baseline_m / params.max_depth_m);
+  const double min_d =
+      std::max(params.min_disparity_px, calib.f_px * calib.baseline_m / params.max_depth_m);
   for (int y = 0; y < disparity_px.height; y += params.step_px) {
     const float* d = disparity_px.row(y);
     const float* s = sigma_d_px.row(y);

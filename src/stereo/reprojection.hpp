@@ -10,9 +10,8 @@
 //                                 [ 0     b/d  -(v - cy) b / d^2 ]
 //                                 [ 0     0    -f b / d^2        ]
 // so sigma_z = z^2 sigma_d / (f b), the familiar depth error of stereo.
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "core/camera.hpp"
 #include "core/image.hpp"
@@ -25,7 +24,7 @@ struct StereoPoint {
   Eigen::Matrix3d cov;    // m^2
   float u_px = 0.0f;      // pixel of the left image
   float v_px = 0.0f;
-  float d_px = 0.0f;      // disparity
+  float d_px = 0.0f;  // disparity
   float sigma_d_px = 0.0f;
 };
 

@@ -31,7 +31,8 @@ float SigmaModel::sigmaFor(float kappa) const {
 
 Status SigmaModel::validate() const {
   if (curvature.empty() || curvature.size() != sigma_px.size())
-    return Status::invalidArgument("sigma model: curvature and sigma tables must be non-empty and of equal length");
+    return Status::invalidArgument(
+        "sigma model: curvature and sigma tables must be non-empty and of equal length");
   for (std::size_t i = 0; i < curvature.size(); ++i) {
     if (!std::isfinite(curvature[i]) || !std::isfinite(sigma_px[i]) || !(sigma_px[i] > 0.0f))
       return Status::invalidArgument("sigma model: knots must be finite with sigma > 0");
@@ -45,7 +46,8 @@ Status SigmaModel::validate() const {
 
 Result<SigmaModel> fitSigmaModel(const std::vector<float>& kappa, const std::vector<float>& abs_err,
                                  int bins) {
-  if (kappa.size() != abs_err.size()) return Status::invalidArgument("fitSigmaModel: size mismatch");
+  if (kappa.size() != abs_err.size())
+    return Status::invalidArgument("fitSigmaModel: size mismatch");
   if (bins < 1) return Status::invalidArgument("fitSigmaModel: bins must be >= 1");
   const std::size_t n = kappa.size();
   if (n < static_cast<std::size_t>(bins) * 20)
@@ -61,8 +63,9 @@ Result<SigmaModel> fitSigmaModel(const std::vector<float>& kappa, const std::vec
     std::vector<float> errs;
     errs.reserve(hi - lo);
     for (std::size_t j = lo; j < hi; ++j) errs.push_back(abs_err[order[j]]);
-    const std::size_t q = std::min(errs.size() - 1,
-                                   static_cast<std::size_t>(std::ceil(0.6827 * static_cast<double>(errs.size()))) - 1);
+    const std::size_t q = std::min(
+        errs.size() - 1,
+        static_cast<std::size_t>(std::ceil(0.6827 * static_cast<double>(errs.size()))) - 1);
     std::nth_element(errs.begin(), errs.begin() + static_cast<std::ptrdiff_t>(q), errs.end());
     const double k_med = kappa[order[(lo + hi) / 2]];
     const double s = std::max(1e-3, static_cast<double>(errs[q]));
@@ -88,8 +91,12 @@ Result<SigmaModel> fitSigmaModel(const std::vector<float>& kappa, const std::vec
       const double nw = w[w.size() - 2] + w.back();
       const double nv = (val[val.size() - 2] * w[w.size() - 2] + val.back() * w.back()) / nw;
       const std::size_t nc = count[count.size() - 2] + count.back();
-      val.pop_back(); w.pop_back(); count.pop_back();
-      val.back() = nv; w.back() = nw; count.back() = nc;
+      val.pop_back();
+      w.pop_back();
+      count.pop_back();
+      val.back() = nv;
+      w.back() = nw;
+      count.back() = nc;
     }
   }
   SigmaModel m;

@@ -1,19 +1,17 @@
 // The svslam executable end to end: outputs, JSON, and a clear error with a non-zero exit for
 // every kind of bad input (never a crash).
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
-#include <string>
-
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <string>
 
 #include "drivers/image_io.hpp"
 #include "drivers/synthetic_pair.hpp"
@@ -30,8 +28,9 @@ struct CliRun {
 class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("svslam_cli_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() /
+           ("svslam_cli_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
     svslam::io::SyntheticPairParams p;
     p.width = 160;
@@ -47,12 +46,14 @@ class Cli : public ::testing::Test {
 
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
   static void writeGrey(const std::string& p, const svslam::ImageU8& img) {
-    cv::Mat m(img.height(), img.width(), CV_8U, const_cast<std::uint8_t*>(img.row(0)), static_cast<std::size_t>(img.stride()));
+    cv::Mat m(img.height(), img.width(), CV_8U, const_cast<std::uint8_t*>(img.row(0)),
+              static_cast<std::size_t>(img.stride()));
     ASSERT_TRUE(cv::imwrite(p, m));
   }
   CliRun run(const std::string& args) const {
     CliRun r;
-    const std::string cmd = std::string(SVSLAM_CLI) + " " + args + " > " + path("stdout.txt") + " 2> " + path("stderr.txt");
+    const std::string cmd = std::string(SVSLAM_CLI) + " " + args + " > " + path("stdout.txt") +
+                            " 2> " + path("stderr.txt");
     const int status = std::system(cmd.c_str());
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     r.out = slurp(path("stdout.txt"));
@@ -77,11 +78,11 @@ class Cli : public ::testing::Test {
 
 TEST_F(Cli, DisparityWritesOutputsAndJson) {
   const CliRun r = run("disparity --left " + path("l.png") + " --right " + path("r.png") +
-                    " --max-disp 32 --repeat 3 --out " + path("d.pfm") + " --sigma " + path("s.pfm") +
-                    " --color " + path("c.png"));
+                       " --max-disp 32 --repeat 3 --out " + path("d.pfm") + " --sigma " +
+                       path("s.pfm") + " --color " + path("c.png"));
   ASSERT_EQ(r.code, 0) << r.err;
-  for (const char* key : {"\"width\": 160", "\"height\": 120", "\"method\": \"census\"", "\"threads\": 1",
-                          "\"median_ms\"", "\"valid_fraction\""})
+  for (const char* key : {"\"width\": 160", "\"height\": 120", "\"method\": \"census\"",
+                          "\"threads\": 1", "\"median_ms\"", "\"valid_fraction\""})
     EXPECT_NE(r.out.find(key), std::string::npos) << key << " in " << r.out;
   auto d = svslam::io::readPfm(path("d.pfm"));
   ASSERT_TRUE(d.isOk());
@@ -95,25 +96,35 @@ TEST_F(Cli, DisparityWritesOutputsAndJson) {
   EXPECT_TRUE(fs::exists(path("s.pfm")));
   EXPECT_TRUE(fs::exists(path("c.png")));
   // KITTI png: uint16 = d * 256, 0 invalid; matches the pfm.
-  ASSERT_EQ(run("disparity --left " + path("l.png") + " --right " + path("r.png") + " --max-disp 32 --out " + path("d.png")).code, 0);
+  ASSERT_EQ(run("disparity --left " + path("l.png") + " --right " + path("r.png") +
+                " --max-disp 32 --out " + path("d.png"))
+                .code,
+            0);
   cv::Mat png = cv::imread(path("d.png"), cv::IMREAD_UNCHANGED);
   ASSERT_EQ(png.type(), CV_16U);
   for (int y = 0; y < png.rows; y += 7)
     for (int x = 0; x < png.cols; x += 5) {
       const float v = (*d)(x, y);
       const int p = png.at<std::uint16_t>(y, x);
-      if (std::isinf(v)) EXPECT_EQ(p, 0);
-      else EXPECT_NEAR(p / 256.0, v, 1.0 / 256);
+      if (std::isinf(v))
+        EXPECT_EQ(p, 0);
+      else
+        EXPECT_NEAR(p / 256.0, v, 1.0 / 256);
     }
   // Threads do not change the result.
-  ASSERT_EQ(run("disparity --left " + path("l.png") + " --right " + path("r.png") + " --max-disp 32 --threads 2 --out " + path("d2.pfm")).code, 0);
+  ASSERT_EQ(run("disparity --left " + path("l.png") + " --right " + path("r.png") +
+                " --max-disp 32 --threads 2 --out " + path("d2.pfm"))
+                .code,
+            0);
   EXPECT_EQ(slurp(path("d.pfm")), slurp(path("d2.pfm")));
 }
 
 TEST_F(Cli, EvalDisparityScoresAgainstGroundTruth) {
-  const CliRun r = run("eval-disparity --gt " + path("gt.pfm") + " --left " + path("l.png") + " --right " + path("r.png") + " --max-disp 32");
+  const CliRun r = run("eval-disparity --gt " + path("gt.pfm") + " --left " + path("l.png") +
+                       " --right " + path("r.png") + " --max-disp 32");
   ASSERT_EQ(r.code, 0) << r.err;
-  for (const char* key : {"bad05_valid_pct", "bad1_valid_pct", "bad2_valid_pct", "bad3_valid_pct", "bad1_all_pct", "density_pct", "mae_valid_px"})
+  for (const char* key : {"bad05_valid_pct", "bad1_valid_pct", "bad2_valid_pct", "bad3_valid_pct",
+                          "bad1_all_pct", "density_pct", "mae_valid_px"})
     EXPECT_NE(r.out.find(key), std::string::npos) << key;
   // Scoring the ground truth against itself: no error, full density.
   const CliRun self = run("eval-disparity --gt " + path("gt.pfm") + " --disp " + path("gt.pfm"));
@@ -136,13 +147,16 @@ TEST_F(Cli, HelpExplainsEveryCommand) {
     EXPECT_NE(r.out.find("--threads"), std::string::npos) << c;
   }
   const CliRun d = run("disparity --help");
-  for (const char* o : {"--left", "--right", "--max-disp", "--min-disp", "--method", "--window", "--threads", "--repeat", "--out", "--sigma", "--color"})
+  for (const char* o : {"--left", "--right", "--max-disp", "--min-disp", "--method", "--window",
+                        "--threads", "--repeat", "--out", "--sigma", "--color"})
     EXPECT_NE(d.out.find(o), std::string::npos) << o;
 }
 
 TEST_F(Cli, BadInputsGiveClearErrors) {
   const std::string pair = " --left " + path("l.png") + " --right " + path("r.png");
-  expectError("disparity --left " + path("missing.png") + " --right " + path("r.png") + " --max-disp 16", "missing.png");
+  expectError(
+      "disparity --left " + path("missing.png") + " --right " + path("r.png") + " --max-disp 16",
+      "missing.png");
   expectError("disparity" + pair + " --max-disp 0", "--max-disp");
   expectError("disparity" + pair + " --max-disp 160", "max_disp");
   expectError("disparity" + pair + " --max-disp 16 --method ssd", "unknown method");
@@ -156,18 +170,27 @@ TEST_F(Cli, BadInputsGiveClearErrors) {
   // Left and right of different sizes.
   svslam::ImageU8 small(100, 120);
   writeGrey(path("small.png"), small);
-  expectError("disparity --left " + path("l.png") + " --right " + path("small.png") + " --max-disp 16", "differ in size");
+  expectError(
+      "disparity --left " + path("l.png") + " --right " + path("small.png") + " --max-disp 16",
+      "differ in size");
   // Empty, garbage and truncated files.
   { std::ofstream(path("empty.png")); }
-  expectError("disparity --left " + path("empty.png") + " --right " + path("r.png") + " --max-disp 16", "empty.png");
+  expectError(
+      "disparity --left " + path("empty.png") + " --right " + path("r.png") + " --max-disp 16",
+      "empty.png");
   { std::ofstream(path("garbage.png")) << "this is not an image"; }
-  expectError("disparity --left " + path("garbage.png") + " --right " + path("r.png") + " --max-disp 16", "garbage.png");
+  expectError(
+      "disparity --left " + path("garbage.png") + " --right " + path("r.png") + " --max-disp 16",
+      "garbage.png");
   const std::string png = slurp(path("l.png"));
   { std::ofstream(path("trunc.png"), std::ios::binary) << png.substr(0, png.size() / 2); }
-  expectError("disparity --left " + path("trunc.png") + " --right " + path("r.png") + " --max-disp 16", "trunc.png");
+  expectError(
+      "disparity --left " + path("trunc.png") + " --right " + path("r.png") + " --max-disp 16",
+      "trunc.png");
   // Output folder that does not exist: error naming the path; nothing half-written.
   expectError("disparity" + pair + " --max-disp 16 --out " + path("no/such/dir/d.pfm"), "d.pfm");
-  expectError("eval-disparity --gt " + path("missing.pfm") + " --disp " + path("gt.pfm"), "missing.pfm");
+  expectError("eval-disparity --gt " + path("missing.pfm") + " --disp " + path("gt.pfm"),
+              "missing.pfm");
   expectError("eval-disparity --dataset " + path("nowhere"), "nowhere");
 }
 
@@ -175,8 +198,14 @@ TEST_F(Cli, ColourInputIsConvertedToGrey) {
   cv::Mat l = cv::imread(path("l.png"), cv::IMREAD_GRAYSCALE), lc;
   cv::cvtColor(l, lc, cv::COLOR_GRAY2BGR);
   ASSERT_TRUE(cv::imwrite(path("lc.png"), lc));
-  ASSERT_EQ(run("disparity --left " + path("lc.png") + " --right " + path("r.png") + " --max-disp 32 --out " + path("a.pfm")).code, 0);
-  ASSERT_EQ(run("disparity --left " + path("l.png") + " --right " + path("r.png") + " --max-disp 32 --out " + path("b.pfm")).code, 0);
+  ASSERT_EQ(run("disparity --left " + path("lc.png") + " --right " + path("r.png") +
+                " --max-disp 32 --out " + path("a.pfm"))
+                .code,
+            0);
+  ASSERT_EQ(run("disparity --left " + path("l.png") + " --right " + path("r.png") +
+                " --max-disp 32 --out " + path("b.pfm"))
+                .code,
+            0);
   EXPECT_EQ(slurp(path("a.pfm")), slurp(path("b.pfm")));
 }
 

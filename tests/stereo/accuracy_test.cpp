@@ -16,7 +16,8 @@ TEST(StereoAccuracy, MiddleburyMeanBad1AtDensity) {
   const char* cases[] = {"middlebury_v2/tsukuba", "middlebury_v2/venus", "middlebury_v2/teddy",
                          "middlebury_v2/cones", "middlebury2006_aloe"};
   for (const char* c : cases)
-    if (!testing::dataPresent(c)) GTEST_SKIP() << "shared data absent: " << testing::dataDir() << "/" << c;
+    if (!testing::dataPresent(c))
+      GTEST_SKIP() << "shared data absent: " << testing::dataDir() << "/" << c;
   double bad1 = 0, density = 0;
   for (const char* c : cases) {
     const auto run = testing::runCase(c, DenseStereoParams{});

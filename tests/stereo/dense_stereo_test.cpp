@@ -1,17 +1,18 @@
 // DenseStereo on synthetic pairs with known disparity, determinism across stripes, executors and
 // SIMD backends, and bad arguments.
+#include "stereo/dense_stereo.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <atomic>
-#include <cstdlib>
-#include <new>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <new>
 #include <random>
 
 #include "core/executor.hpp"
-#include "stereo/dense_stereo.hpp"
 
 // Counts heap allocations made by this test binary (for the "allocates nothing once warm" test).
 // GCC 12 flags the malloc/free pair behind a replaced operator new/delete once inlined
@@ -61,7 +62,8 @@ ImageU8 shifted(const ImageU8& left, int d) {
 bool sameBits(const ImageF32& a, const ImageF32& b) {
   if (a.width() != b.width() || a.height() != b.height()) return false;
   for (int y = 0; y < a.height(); ++y)
-    if (std::memcmp(a.row(y), b.row(y), sizeof(float) * static_cast<std::size_t>(a.width())) != 0) return false;
+    if (std::memcmp(a.row(y), b.row(y), sizeof(float) * static_cast<std::size_t>(a.width())) != 0)
+      return false;
   return true;
 }
 
@@ -115,7 +117,8 @@ TEST(DenseStereo, SubpixelFollowsASlantedPlane) {
       const double xl = (x + 8.0) / (1.0 - 1.0 / 40.0);
       const int x0 = std::min(static_cast<int>(xl), w - 2);
       const double t = std::min(1.0, xl - x0);
-      right(x, y) = static_cast<std::uint8_t>(std::lround((1 - t) * left(x0, y) + t * left(x0 + 1, y)));
+      right(x, y) =
+          static_cast<std::uint8_t>(std::lround((1 - t) * left(x0, y) + t * left(x0 + 1, y)));
     }
   DenseStereoParams p;
   p.max_disp = 24;
@@ -154,7 +157,8 @@ TEST(DenseStereo, IdenticalForAnyStripeCountExecutorAndBackend) {
     DenseStereo ref(p, left.width(), left.height());
     DisparityResult r0;
     ASSERT_TRUE(ref.process(left.cview(), right.cview(), r0).isOk());
-    for (simd::Backend b : {simd::Backend::kScalar, simd::Backend::kAvx2, simd::Backend::kAvx512, simd::Backend::kNeon}) {
+    for (simd::Backend b : {simd::Backend::kScalar, simd::Backend::kAvx2, simd::Backend::kAvx512,
+                            simd::Backend::kNeon}) {
       if (!simd::backendAvailable(b)) continue;
       for (int stripes : {1, 3, 8, 77}) {
         DenseStereoParams q = p;
@@ -164,8 +168,10 @@ TEST(DenseStereo, IdenticalForAnyStripeCountExecutorAndBackend) {
         CountingExecutor ex;
         DisparityResult r;
         ASSERT_TRUE(s.process(left.cview(), right.cview(), r, ex).isOk());
-        EXPECT_TRUE(sameBits(r0.disparity_px, r.disparity_px)) << simd::backendName(b) << " stripes " << stripes;
-        EXPECT_TRUE(sameBits(r0.sigma_d_px, r.sigma_d_px)) << simd::backendName(b) << " stripes " << stripes;
+        EXPECT_TRUE(sameBits(r0.disparity_px, r.disparity_px))
+            << simd::backendName(b) << " stripes " << stripes;
+        EXPECT_TRUE(sameBits(r0.sigma_d_px, r.sigma_d_px))
+            << simd::backendName(b) << " stripes " << stripes;
         EXPECT_EQ(r0.stats.valid, r.stats.valid);
       }
     }
@@ -229,18 +235,65 @@ TEST(DenseStereo, RejectsBadParametersAndInputs) {
   auto bad = [](DenseStereoParams p) { return !p.validate().isOk(); };
   DenseStereoParams p;
   EXPECT_TRUE(p.validate().isOk());
-  { auto q = p; q.max_disp = 0; EXPECT_TRUE(bad(q)); }
-  { auto q = p; q.min_disp = -1; EXPECT_TRUE(bad(q)); }
-  { auto q = p; q.min_disp = 64; EXPECT_TRUE(bad(q)); }
-  { auto q = p; q.census_w = 9; q.census_h = 9; EXPECT_TRUE(bad(q)); }  // 80 neighbours
-  { auto q = p; q.census_w = 4; EXPECT_TRUE(bad(q)); }
-  { auto q = p; q.window_w = 33; EXPECT_TRUE(bad(q)); }
-  { auto q = p; q.cost = MatchingCost::kSad; q.prefilter = SadPrefilter::kNone; q.window_w = 17; q.window_h = 17;
-    EXPECT_TRUE(bad(q)); }  // 289 * 255 overflows 16 bits
-  { auto q = p; q.texture_threshold = std::nanf(""); EXPECT_TRUE(bad(q)); }
-  { auto q = p; q.uniqueness_pct = 101; EXPECT_TRUE(bad(q)); }
-  { auto q = p; q.num_stripes = 0; EXPECT_TRUE(bad(q)); }
-  { auto q = p; q.sigma_model.sigma_px[0] = -1.0f; EXPECT_TRUE(bad(q)); }
+  {
+    auto q = p;
+    q.max_disp = 0;
+    EXPECT_TRUE(bad(q));
+  }
+  {
+    auto q = p;
+    q.min_disp = -1;
+    EXPECT_TRUE(bad(q));
+  }
+  {
+    auto q = p;
+    q.min_disp = 64;
+    EXPECT_TRUE(bad(q));
+  }
+  {
+    auto q = p;
+    q.census_w = 9;
+    q.census_h = 9;
+    EXPECT_TRUE(bad(q));
+  }  // 80 neighbours
+  {
+    auto q = p;
+    q.census_w = 4;
+    EXPECT_TRUE(bad(q));
+  }
+  {
+    auto q = p;
+    q.window_w = 33;
+    EXPECT_TRUE(bad(q));
+  }
+  {
+    auto q = p;
+    q.cost = MatchingCost::kSad;
+    q.prefilter = SadPrefilter::kNone;
+    q.window_w = 17;
+    q.window_h = 17;
+    EXPECT_TRUE(bad(q));
+  }  // 289 * 255 overflows 16 bits
+  {
+    auto q = p;
+    q.texture_threshold = std::nanf("");
+    EXPECT_TRUE(bad(q));
+  }
+  {
+    auto q = p;
+    q.uniqueness_pct = 101;
+    EXPECT_TRUE(bad(q));
+  }
+  {
+    auto q = p;
+    q.num_stripes = 0;
+    EXPECT_TRUE(bad(q));
+  }
+  {
+    auto q = p;
+    q.sigma_model.sigma_px[0] = -1.0f;
+    EXPECT_TRUE(bad(q));
+  }
 
   DenseStereoParams q;
   q.max_disp = 64;
@@ -254,7 +307,8 @@ TEST(DenseStereo, RejectsBadParametersAndInputs) {
   ASSERT_TRUE(s.initStatus().isOk());
   ImageU8 l(100, 50), wrong(99, 50);
   EXPECT_EQ(s.process(l.cview(), wrong.cview(), r).code(), StatusCode::kInvalidArgument);
-  EXPECT_EQ(s.process(ImageView<const std::uint8_t>(), l.cview(), r).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(s.process(ImageView<const std::uint8_t>(), l.cview(), r).code(),
+            StatusCode::kInvalidArgument);
 }
 
 }  // namespace

@@ -12,7 +12,9 @@ namespace svslam::testing {
 
 inline std::string dataDir() { return SVSLAM_DATA_DIR; }
 
-inline bool dataPresent(const std::string& sub) { return std::filesystem::exists(dataDir() + "/" + sub); }
+inline bool dataPresent(const std::string& sub) {
+  return std::filesystem::exists(dataDir() + "/" + sub);
+}
 
 struct CaseRun {
   cli::LoadedCase loaded;
@@ -36,7 +38,8 @@ inline CaseRun runCase(const std::string& sub, DenseStereoParams params) {
   SerialExecutor ex;
   Status s = cli::computeDisparity(run.loaded, params, ex, run.result, nullptr);
   EXPECT_TRUE(s.isOk()) << s.message();
-  auto m = evaluateDisparity(run.result.disparity_px.cview(), run.loaded.gt.cview(), run.loaded.mask.cview());
+  auto m = evaluateDisparity(run.result.disparity_px.cview(), run.loaded.gt.cview(),
+                             run.loaded.mask.cview());
   EXPECT_TRUE(m.isOk()) << m.status().message();
   if (m) run.metrics = *m;
   return run;

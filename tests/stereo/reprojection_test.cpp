@@ -1,11 +1,11 @@
 // Reprojection: geometry against the triangulation formulas, the covariance against a numeric
 // Jacobian and against Monte Carlo sampling of (u, v, d).
+#include "stereo/reprojection.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
-
-#include "stereo/reprojection.hpp"
 
 namespace svslam {
 namespace {
@@ -44,9 +44,12 @@ TEST(Reprojection, CovarianceMatchesNumericJacobian) {
     double a[3] = {in[0], in[1], in[2]}, b[3] = {in[0], in[1], in[2]};
     a[k] += h;
     b[k] -= h;
-    J.col(k) = (reprojectPixel(c, a[0], a[1], a[2], 0, 0).p_cam - reprojectPixel(c, b[0], b[1], b[2], 0, 0).p_cam) / (2 * h);
+    J.col(k) = (reprojectPixel(c, a[0], a[1], a[2], 0, 0).p_cam -
+                reprojectPixel(c, b[0], b[1], b[2], 0, 0).p_cam) /
+               (2 * h);
   }
-  const Eigen::Matrix3d expected = J * Eigen::Vector3d(suv * suv, suv * suv, sd * sd).asDiagonal() * J.transpose();
+  const Eigen::Matrix3d expected =
+      J * Eigen::Vector3d(suv * suv, suv * suv, sd * sd).asDiagonal() * J.transpose();
   EXPECT_TRUE(p.cov.isApprox(expected, 1e-6)) << p.cov << "\n\n" << expected;
 }
 
@@ -67,7 +70,8 @@ TEST(Reprojection, CovarianceMatchesMonteCarloAtSmallErrors) {
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (const auto& q : s) cov += (q - mean) * (q - mean).transpose();
   cov /= (N - 1);
-  for (int i = 0; i < 3; ++i) EXPECT_NEAR(std::sqrt(cov(i, i)) / std::sqrt(p.cov(i, i)), 1.0, 0.03) << i;
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NEAR(std::sqrt(cov(i, i)) / std::sqrt(p.cov(i, i)), 1.0, 0.03) << i;
 }
 
 TEST(Reprojection, MapSkipsInvalidAndChecksInputs) {

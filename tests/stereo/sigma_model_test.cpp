@@ -1,11 +1,11 @@
 // SigmaModel: interpolation, validation, and the fit on synthetic samples whose true sigma is
 // known (sigma = 0.1 + 2 / kappa, Gaussian errors).
+#include "stereo/sigma_model.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
-
-#include "stereo/sigma_model.hpp"
 
 namespace svslam {
 namespace {
