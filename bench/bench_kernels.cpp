@@ -76,6 +76,7 @@ void BM_AddSubBoxPlanes(benchmark::State& st) {
   st.SetItemsProcessed(st.iterations() * kW * 64);
 }
 
+// range(1) = 0: left and right WTA; 1: left only (d0 = width leaves no right-image candidate).
 void BM_WtaPlanes(benchmark::State& st) {
   const auto* k = kernelsOrSkip(st);
   if (!k) return;
@@ -106,7 +107,11 @@ void backends(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_CensusRow)->Apply(backends);
 BENCHMARK(BM_CensusCostPlanes)->Apply(backends);
 BENCHMARK(BM_AddSubBoxPlanes)->Apply(backends);
-BENCHMARK(BM_WtaPlanes)->Apply(backends);
+BENCHMARK(BM_WtaPlanes)->Apply([](benchmark::internal::Benchmark* b) {
+  for (auto be : {simd::Backend::kScalar, simd::Backend::kAvx2, simd::Backend::kAvx512, simd::Backend::kNeon})
+    for (int left_only : {0, 1}) b->Args({static_cast<int>(be), left_only});
+  b->ArgNames({"backend", "left_only"});
+});
 
 }  // namespace
 
