@@ -13,6 +13,7 @@ void addStereoOptions(ArgParser& p) {
   p.addOption("census", "WxH", "census window, odd sides, at most 64 neighbours", "9x7");
   p.addOption("prefilter", "none|mean|xsobel", "SAD prefilter (as OpenCV BM)", "xsobel");
   p.addOption("prefilter-cap", "N", "SAD prefilter clip, grey levels 1..63", "31");
+  p.addOption("prefilter-size", "N", "SAD mean-removal window side, odd 3..21", "9");
   p.addOption("uniqueness", "PCT", "best cost must beat the second best by PCT percent (0 = off)",
               "10");
   p.addOption("texture", "T", "minimum mean |dI/dx| over the window, grey levels (0 = off)", "0");
@@ -66,6 +67,9 @@ Result<DenseStereoParams> stereoParamsFromArgs(const ArgParser& p, int max_disp)
   auto cap = p.getInt("prefilter-cap", 1, 63);
   if (!cap) return cap.status();
   sp.prefilter_cap = *cap;
+  auto pf_size = p.getInt("prefilter-size", 3, 21);
+  if (!pf_size) return pf_size.status();
+  sp.prefilter_size = *pf_size;
   auto uniq = p.getInt("uniqueness", 0, 100);
   if (!uniq) return uniq.status();
   sp.uniqueness_pct = *uniq;

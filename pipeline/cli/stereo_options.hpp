@@ -6,6 +6,7 @@
 namespace svslam::cli {
 
 // Declares --min-disp, --method, --window, --census, --prefilter, --prefilter-cap,
+// --prefilter-size,
 // --uniqueness, --texture, --no-lr-check, --lr-max-diff, --no-subpixel, --backend, --threads,
 // --stripes, --sigma-model. (--max-disp is declared by each command.)
 void addStereoOptions(ArgParser& p);
