@@ -36,6 +36,11 @@ struct WtaRowState {
 
 void wtaInitRow(const WtaRowState& s, int width);
 
+// The left-image part of the scalar reference's wtaUpdateRows on columns [x0, width) only: the
+// tail of a vector body (right-image candidates are left to the caller).
+void wtaLeftTail(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int x0,
+                 int width, const WtaRowState& s);
+
 struct StereoKernels {
   Backend backend;
   const char* name;

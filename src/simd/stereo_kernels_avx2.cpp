@@ -193,32 +193,6 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
   }
 }
 
-// Left-image part of the scalar reference on columns [x0, width) (tail of the vector body).
-void wtaLeftTail(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int x0,
-                 int width, const WtaRowState& s) {
-  for (int p = 0; p < n_planes; ++p) {
-    const int i = i0 + p;
-    const std::uint16_t* a = agg + p * stride;
-    const std::uint16_t* prev = a - stride;
-    for (int x = x0; x < width; ++x) {
-      const std::uint16_t c = a[x];
-      if (c < s.best[x]) {
-        s.second[x] = s.pm2[x];
-        s.best[x] = c;
-        s.bidx[x] = static_cast<std::int16_t>(i);
-        s.cm[x] = prev[x];
-        s.cp[x] = 0xFFFF;
-      } else if (i == s.bidx[x] + 1) {
-        s.cp[x] = c;
-      } else if (c < s.second[x]) {
-        s.second[x] = c;
-      }
-      s.pm2[x] = s.pm1[x];
-      if (c < s.pm1[x]) s.pm1[x] = c;
-    }
-  }
-}
-
 // The left state of 16 columns stays in registers across the planes; the branches of the
 // reference become blends. Compared values (best, second, pm1, pm2, costs) are held biased by
 // xor 0x8000 so that signed compares order them as uint16.

@@ -206,13 +206,7 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
            _mm512_set1_epi16(static_cast<short>(i0 + p - 1)));
     store(x, l);
   }
-  if (x < width) {
-    // Left-image part of the tail: the scalar reference on [x, width) without right pixels
-    // (d0 = width - x puts every right candidate out of range).
-    const WtaRowState t{s_best + x, s_bidx + x, s_second + x, s_cm + x, s_cp + x,
-                        s_pm1 + x,  s_pm2 + x,  s_best_r,     s_idx_r};
-    scalarKernels().wtaUpdateRows(agg + x, stride, n_planes, i0, width - x, width - x, t);
-  }
+  wtaLeftTail(agg, stride, n_planes, i0, x, width, s);
   for (int p = 0; p < n_planes; ++p) {
     const int off = d0 + i0 + p;
     const std::uint16_t* a = agg + p * stride + off;

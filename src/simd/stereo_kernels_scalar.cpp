@@ -13,6 +13,15 @@ void wtaInitRow(const WtaRowState& s, int width) {
   }
 }
 
+void wtaLeftTail(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int x0,
+                 int width, const WtaRowState& s) {
+  if (x0 >= width) return;
+  // The reference on the sub-range, with d0 = its width so that no right-image pixel is touched.
+  const WtaRowState t{s.best + x0, s.bidx + x0, s.second + x0, s.cm + x0, s.cp + x0,
+                      s.pm1 + x0,  s.pm2 + x0,  s.best_r,      s.idx_r};
+  scalarKernels().wtaUpdateRows(agg + x0, stride, n_planes, i0, width - x0, width - x0, t);
+}
+
 namespace {
 
 void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w, int win_h,
