@@ -9,5 +9,6 @@ namespace svslam::cli {
 int runDisparity(const std::vector<std::string>& args);
 int runEvalDisparity(const std::vector<std::string>& args);
 int runFitSigma(const std::vector<std::string>& args);
+int runEvalTrajectory(const std::vector<std::string>& args);
 
 }  // namespace svslam::cli

@@ -146,6 +146,7 @@ TEST_F(Cli, HelpExplainsEveryCommand) {
     EXPECT_EQ(r.code, 0) << c;
     EXPECT_NE(r.out.find("--threads"), std::string::npos) << c;
   }
+  EXPECT_EQ(run("eval-trajectory --help").code, 0);
   const CliRun d = run("disparity --help");
   for (const char* o : {"--left", "--right", "--max-disp", "--min-disp", "--method", "--window",
                         "--threads", "--repeat", "--out", "--sigma", "--color"})
@@ -192,6 +193,36 @@ TEST_F(Cli, BadInputsGiveClearErrors) {
   expectError("eval-disparity --gt " + path("missing.pfm") + " --disp " + path("gt.pfm"),
               "missing.pfm");
   expectError("eval-disparity --dataset " + path("nowhere"), "nowhere");
+}
+
+TEST_F(Cli, EvalTrajectoryScoresAndRejectsBadInput) {
+  {
+    std::ofstream f(path("gt.txt"));
+    for (int i = 0; i < 30; ++i) f << "1 0 0 0 0 1 0 0 0 0 1 " << i << "\n";  // straight along z
+  }
+  {
+    std::ofstream f(path("est.txt"));
+    for (int i = 0; i < 30; ++i) f << "1 0 0 0 0 1 0 0 0 0 1 " << 1.02 * i << "\n";  // 2 % long
+  }
+  const CliRun r = run("eval-trajectory --gt " + path("gt.txt") + " --est " + path("est.txt") +
+                       " --segments 5 --step 1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  // KITTI devkit: a segment ends at the first frame farther than L (here 6 m for L = 5 m) and its
+  // error is divided by L: 2 % of 6 m over 5 m = 2.4 %.
+  EXPECT_NE(r.out.find("\"t_err_pct\": 2.4000"), std::string::npos) << r.out;
+  for (const char* key :
+       {"ate_rmse_m", "rpe_trans_rmse_m", "final_pos_err_m", "final_att_err_deg", "segments"})
+    EXPECT_NE(r.out.find(key), std::string::npos) << key;
+  expectError("eval-trajectory --gt " + path("gt.txt") + " --est " + path("none.txt"), "none.txt");
+  expectError(
+      "eval-trajectory --gt " + path("gt.txt") + " --est " + path("est.txt") + " --align sim3",
+      "unknown alignment");
+  expectError(
+      "eval-trajectory --gt " + path("gt.txt") + " --est " + path("est.txt") + " --segments 5,x",
+      "not a number");
+  { std::ofstream(path("short.txt")) << "1 0 0 0 0 1 0 0 0 0 1 0\n"; }
+  expectError("eval-trajectory --gt " + path("gt.txt") + " --est " + path("short.txt"),
+              "paired by index");
 }
 
 TEST_F(Cli, ColourInputIsConvertedToGrey) {

@@ -1,0 +1,102 @@
+// svslam eval-trajectory: drift, ATE and RPE of an estimated trajectory against ground truth.
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "drivers/trajectory_io.hpp"
+#include "eval/trajectory_metrics.hpp"
+#include "pipeline/cli/arg_parser.hpp"
+#include "pipeline/cli/commands.hpp"
+#include "pipeline/cli/json_writer.hpp"
+#include "pipeline/cli/stereo_case.hpp"
+
+namespace svslam::cli {
+
+int runEvalTrajectory(const std::vector<std::string>& args) {
+  ArgParser p(
+      "eval-trajectory",
+      "Scores an estimated camera trajectory against ground truth and prints JSON: KITTI\n"
+      "devkit segment drift (translation %, rotation deg/m) per length and on average, ATE\n"
+      "RMSE after alignment, frame-to-frame RPE, final position and attitude error.\n"
+      "Files: KITTI poses (3x4 per line, paired by index) or TUM (t tx ty tz qx qy qz qw,\n"
+      "paired by nearest stamp); EuRoC body ground truth becomes cam0 with --body-to-cam.");
+  p.addOption("gt", "FILE", "ground-truth trajectory (KITTI or TUM)", std::nullopt, true);
+  p.addOption("est", "FILE", "estimated trajectory (KITTI or TUM)", std::nullopt, true);
+  p.addOption("segments", "L1,L2,...", "segment lengths in metres",
+              "100,200,300,400,500,600,700,800");
+  p.addOption("step", "N", "first frames of segments every N frames (KITTI devkit: 10)", "10");
+  p.addOption("align", "se3|none",
+              "se3: Umeyama rigid alignment; none: both relative to their first pose", "se3");
+  p.addOption("max-dt", "S", "largest stamp difference when pairing TUM files, seconds", "0.02");
+  p.addOption("body-to-cam", "SENSOR_YAML",
+              "EuRoC cam0 sensor.yaml: ground truth T_W_B becomes T_W_B * T_BS");
+  if (auto code = parseCommandLine(p, args)) return *code;
+  auto fail = [](const Status& s) { return reportFailure("eval-trajectory", s); };
+
+  TrajectoryEvalParams params;
+  params.segment_lengths_m.clear();
+  for (const auto& part : splitList(p.get("segments"))) {
+    char* end = nullptr;
+    const double v = std::strtod(part.c_str(), &end);
+    if (end == part.c_str() || *end != '\0')
+      return fail(Status::invalidArgument("--segments: '" + part + "' is not a number"));
+    params.segment_lengths_m.push_back(v);
+  }
+  auto step = p.getInt("step", 1, 100000);
+  if (!step) return fail(step.status());
+  params.step_frames = *step;
+  if (p.get("align") == "se3") {
+    params.align = TrajectoryAlignment::kSe3;
+  } else if (p.get("align") == "none") {
+    params.align = TrajectoryAlignment::kNone;
+  } else {
+    return fail(Status::invalidArgument("--align: unknown alignment '" + p.get("align") +
+                                        "' (use se3 or none)"));
+  }
+  if (Status s = params.validate(); !s) return fail(s);
+  auto max_dt = p.getDouble("max-dt");
+  if (!max_dt) return fail(max_dt.status());
+
+  auto gt = io::readTrajectory(p.get("gt"));
+  if (!gt) return fail(gt.status());
+  auto est = io::readTrajectory(p.get("est"));
+  if (!est) return fail(est.status());
+  if (p.has("body-to-cam")) {
+    auto tbs = io::readEurocTbs(p.get("body-to-cam"));
+    if (!tbs) return fail(tbs.status());
+    for (auto& T : gt->poses) T = T * *tbs;
+  }
+  std::vector<Eigen::Isometry3d> g, e;
+  if (Status s = io::associateTrajectories(*gt, *est, *max_dt, g, e); !s) return fail(s);
+  auto m = evaluateTrajectory(g, e, params);
+  if (!m) return fail(m.status());
+
+  std::string segs = "[";
+  for (std::size_t i = 0; i < m->segments.size(); ++i) {
+    const auto& sd = m->segments[i];
+    JsonObject js;
+    js.add("length_m", sd.length_m, 2)
+        .add("count", sd.count)
+        .add("t_err_pct", sd.t_err_pct)
+        .add("r_err_deg_per_m", sd.r_err_deg_per_m, 6);
+    segs += (i ? ", " : "") + js.str();
+  }
+  segs += "]";
+  JsonObject j;
+  j.add("frames", m->frames)
+      .add("path_length_m", m->path_length_m, 3)
+      .add("t_err_pct", m->t_err_pct)
+      .add("r_err_deg_per_m", m->r_err_deg_per_m, 6)
+      .addRaw("segments", segs)
+      .add("align", p.get("align"))
+      .add("ate_rmse_m", m->ate_rmse_m)
+      .add("rpe_trans_rmse_m", m->rpe_trans_rmse_m)
+      .add("rpe_rot_rmse_deg", m->rpe_rot_rmse_deg)
+      .add("final_pos_err_m", m->final_pos_err_m)
+      .add("final_att_err_deg", m->final_att_err_deg);
+  std::printf("%s\n", j.str().c_str());
+  return 0;
+}
+
+}  // namespace svslam::cli

@@ -1,0 +1,145 @@
+#include "eval/trajectory_metrics.hpp"
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace svslam {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+bool finitePose(const Eigen::Isometry3d& T) { return T.matrix().allFinite(); }
+
+}  // namespace
+
+Status TrajectoryEvalParams::validate() const {
+  if (segment_lengths_m.empty()) return Status::invalidArgument("no segment length given");
+  for (double l : segment_lengths_m)
+    if (!std::isfinite(l) || l <= 0)
+      return Status::invalidArgument("segment lengths must be finite and > 0");
+  if (step_frames < 1) return Status::invalidArgument("step_frames must be >= 1");
+  return Status::ok();
+}
+
+double rotationAngle(const Eigen::Matrix3d& R) {
+  // atan2 of the skew and symmetric parts: accurate near 0 and pi, unlike acos((tr - 1) / 2).
+  const Eigen::Vector3d w(R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1));
+  return std::atan2(0.5 * w.norm(), 0.5 * (R.trace() - 1.0));
+}
+
+Eigen::Isometry3d umeyamaSe3(const std::vector<Eigen::Vector3d>& est,
+                             const std::vector<Eigen::Vector3d>& gt) {
+  const std::size_t n = est.size();
+  Eigen::Vector3d mu_e = Eigen::Vector3d::Zero(), mu_g = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    mu_e += est[i];
+    mu_g += gt[i];
+  }
+  mu_e /= static_cast<double>(n);
+  mu_g /= static_cast<double>(n);
+  Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();  // cross-covariance gt x est
+  for (std::size_t i = 0; i < n; ++i) sigma += (gt[i] - mu_g) * (est[i] - mu_e).transpose();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(sigma, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
+  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) S(2, 2) = -1;  // no reflection
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = svd.matrixU() * S * svd.matrixV().transpose();
+  T.translation() = mu_g - T.linear() * mu_e;
+  return T;
+}
+
+Result<TrajectoryMetrics> evaluateTrajectory(const std::vector<Eigen::Isometry3d>& gt,
+                                             const std::vector<Eigen::Isometry3d>& est,
+                                             const TrajectoryEvalParams& params) {
+  if (Status s = params.validate(); !s) return s;
+  if (gt.size() != est.size())
+    return Status::invalidArgument("ground truth has " + std::to_string(gt.size()) +
+                                   " poses but the estimate has " + std::to_string(est.size()));
+  if (gt.size() < 3) return Status::invalidArgument("need at least 3 associated poses");
+  for (std::size_t i = 0; i < gt.size(); ++i)
+    if (!finitePose(gt[i]) || !finitePose(est[i]))
+      return Status::invalidArgument("pose " + std::to_string(i) + " contains NaN or infinity");
+  const std::size_t n = gt.size();
+  TrajectoryMetrics m;
+  m.frames = static_cast<int>(n);
+
+  // KITTI devkit: path distances of the ground truth, segments from every step-th frame.
+  std::vector<double> dist(n, 0.0);
+  for (std::size_t i = 1; i < n; ++i)
+    dist[i] = dist[i - 1] + (gt[i].translation() - gt[i - 1].translation()).norm();
+  m.path_length_m = dist.back();
+  double sum_t = 0, sum_r = 0;
+  int total = 0;
+  for (double len : params.segment_lengths_m) {
+    SegmentDrift sd;
+    sd.length_m = len;
+    for (std::size_t first = 0; first < n; first += static_cast<std::size_t>(params.step_frames)) {
+      std::size_t last = first;
+      while (last < n && dist[last] <= dist[first] + len) ++last;
+      if (last >= n) continue;
+      const Eigen::Isometry3d delta_gt = gt[first].inverse() * gt[last];
+      const Eigen::Isometry3d delta_est = est[first].inverse() * est[last];
+      const Eigen::Isometry3d err = delta_est.inverse() * delta_gt;
+      const double t_err = err.translation().norm() / len;
+      const double r_err = rotationAngle(err.linear()) / len;
+      sd.t_err_pct += 100.0 * t_err;
+      sd.r_err_deg_per_m += kRadToDeg * r_err;
+      sum_t += 100.0 * t_err;
+      sum_r += kRadToDeg * r_err;
+      ++sd.count;
+      ++total;
+    }
+    if (sd.count > 0) {
+      sd.t_err_pct /= sd.count;
+      sd.r_err_deg_per_m /= sd.count;
+    }
+    m.segments.push_back(sd);
+  }
+  m.t_err_pct = total > 0 ? sum_t / total : NAN;
+  m.r_err_deg_per_m = total > 0 ? sum_r / total : NAN;
+
+  // Relative pose error between consecutive frames.
+  double rpe_t = 0, rpe_r = 0;
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const Eigen::Isometry3d err =
+        (est[i].inverse() * est[i + 1]).inverse() * (gt[i].inverse() * gt[i + 1]);
+    rpe_t += err.translation().squaredNorm();
+    const double a = rotationAngle(err.linear()) * kRadToDeg;
+    rpe_r += a * a;
+  }
+  m.rpe_trans_rmse_m = std::sqrt(rpe_t / static_cast<double>(n - 1));
+  m.rpe_rot_rmse_deg = std::sqrt(rpe_r / static_cast<double>(n - 1));
+
+  // Absolute errors, after alignment.
+  std::vector<Eigen::Isometry3d> est_aligned(n), gt_ref(n);
+  if (params.align == TrajectoryAlignment::kSe3) {
+    std::vector<Eigen::Vector3d> pe(n), pg(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      pe[i] = est[i].translation();
+      pg[i] = gt[i].translation();
+    }
+    const Eigen::Isometry3d T = umeyamaSe3(pe, pg);
+    for (std::size_t i = 0; i < n; ++i) {
+      est_aligned[i] = T * est[i];
+      gt_ref[i] = gt[i];
+    }
+  } else {
+    const Eigen::Isometry3d g0 = gt[0].inverse(), e0 = est[0].inverse();
+    for (std::size_t i = 0; i < n; ++i) {
+      est_aligned[i] = e0 * est[i];
+      gt_ref[i] = g0 * gt[i];
+    }
+  }
+  double ate = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    ate += (est_aligned[i].translation() - gt_ref[i].translation()).squaredNorm();
+  m.ate_rmse_m = std::sqrt(ate / static_cast<double>(n));
+  m.final_pos_err_m = (est_aligned[n - 1].translation() - gt_ref[n - 1].translation()).norm();
+  m.final_att_err_deg =
+      kRadToDeg * rotationAngle(est_aligned[n - 1].linear().transpose() * gt_ref[n - 1].linear());
+  return m;
+}
+
+}  // namespace svslam

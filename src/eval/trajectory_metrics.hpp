@@ -1,0 +1,58 @@
+#pragma once
+// Trajectory accuracy: KITTI-devkit segment drift, ATE after SE(3) Umeyama alignment, RPE per
+// frame, final position and attitude errors.
+//
+// Inputs are associated pose pairs (gt[k], est[k]) of the same camera (T_world_cam: maps a point
+// in the camera frame into the trajectory's world frame, metres). Each trajectory may live in its
+// own world frame: drift and RPE use relative motions only; ATE and the final errors compare
+// positions after SE(3) alignment (Umeyama, no scale) or, with align = kNone, after expressing
+// both trajectories relative to their first pose.
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "core/status.hpp"
+
+namespace svslam {
+
+enum class TrajectoryAlignment { kSe3, kNone };
+
+struct SegmentDrift {
+  double length_m = 0;
+  int count = 0;               // segments of this length found
+  double t_err_pct = 0;        // mean |translation error| / length, percent
+  double r_err_deg_per_m = 0;  // mean rotation error / length
+};
+
+struct TrajectoryMetrics {
+  int frames = 0;
+  std::vector<SegmentDrift> segments;
+  double t_err_pct = 0;  // mean over every segment of every length (devkit average)
+  double r_err_deg_per_m = 0;
+  double ate_rmse_m = 0;
+  double rpe_trans_rmse_m = 0;  // frame-to-frame relative pose error
+  double rpe_rot_rmse_deg = 0;
+  double final_pos_err_m = 0;
+  double final_att_err_deg = 0;
+  double path_length_m = 0;  // ground truth
+};
+
+struct TrajectoryEvalParams {
+  std::vector<double> segment_lengths_m = {100, 200, 300, 400, 500, 600, 700, 800};  // devkit
+  int step_frames = 10;  // first frames of segments every step_frames frames (devkit: 10)
+  TrajectoryAlignment align = TrajectoryAlignment::kSe3;
+  Status validate() const;
+};
+
+// The rigid transform T (no scale) minimising sum |gt_i - T est_i|^2 (Umeyama 1991).
+// Precondition: equal sizes >= 3, points not all collinear for a unique answer.
+Eigen::Isometry3d umeyamaSe3(const std::vector<Eigen::Vector3d>& est,
+                             const std::vector<Eigen::Vector3d>& gt);
+
+// Rotation angle of R (a rotation matrix) in radians, in [0, pi].
+double rotationAngle(const Eigen::Matrix3d& R);
+
+Result<TrajectoryMetrics> evaluateTrajectory(const std::vector<Eigen::Isometry3d>& gt,
+                                             const std::vector<Eigen::Isometry3d>& est,
+                                             const TrajectoryEvalParams& params);
+
+}  // namespace svslam
