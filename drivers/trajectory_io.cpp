@@ -6,6 +6,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "drivers/yaml_lists.hpp"
+
 namespace svslam::io {
 namespace {
 
@@ -72,28 +74,13 @@ Result<TrajectoryFile> readTrajectory(const std::string& path) {
 }
 
 Result<Eigen::Isometry3d> readEurocTbs(const std::string& sensor_yaml) {
-  std::ifstream f(sensor_yaml);
-  if (!f) return Status::notFound("cannot open EuRoC sensor file " + sensor_yaml);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  const std::string text = ss.str();
-  const auto tbs = text.find("T_BS:");
-  if (tbs == std::string::npos) return Status::corruptData(sensor_yaml + ": no T_BS entry");
-  const auto data = text.find("data:", tbs);
-  const auto open = text.find('[', data);
-  const auto close = text.find(']', open);
-  if (data == std::string::npos || open == std::string::npos || close == std::string::npos)
-    return Status::corruptData(sensor_yaml + ": T_BS has no 'data: [...]' list");
-  std::string list = text.substr(open + 1, close - open - 1);
-  std::replace(list.begin(), list.end(), ',', ' ');
-  std::istringstream s(list);
-  std::vector<double> v;
-  double d;
-  while (s >> d) v.push_back(d);
-  if (v.size() != 16) return Status::corruptData(sensor_yaml + ": T_BS data must have 16 numbers");
+  auto text = readTextFile(sensor_yaml);
+  if (!text) return text.status();
+  auto v = yamlNumberList(*text, "T_BS", "data", sensor_yaml);
+  if (!v) return v.status();
+  if (v->size() != 16) return Status::corruptData(sensor_yaml + ": T_BS data must have 16 numbers");
   Eigen::Matrix4d M;
-  for (int i = 0; i < 16; ++i) M(i / 4, i % 4) = v[static_cast<std::size_t>(i)];
-  if (!M.allFinite()) return Status::corruptData(sensor_yaml + ": T_BS contains NaN or infinity");
+  for (int i = 0; i < 16; ++i) M(i / 4, i % 4) = (*v)[static_cast<std::size_t>(i)];
   Eigen::Isometry3d T;
   T.matrix() = M;
   return T;
