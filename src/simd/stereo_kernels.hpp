@@ -41,6 +41,10 @@ void wtaInitRow(const WtaRowState& s, int width);
 void wtaLeftTail(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int x0,
                  int width, const WtaRowState& s);
 
+// The right-image update of plane i for right pixels [xr0, n_right): candidate cand[xr] (the
+// plane's cost at x = xr + d0 + i) replaces best_r[xr] when strictly smaller.
+void wtaRightTail(const std::uint16_t* cand, int xr0, int n_right, int i, const WtaRowState& s);
+
 struct StereoKernels {
   Backend backend;
   const char* name;

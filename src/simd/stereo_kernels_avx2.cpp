@@ -12,25 +12,6 @@ namespace {
 inline __m256i loadu(const void* p) { return _mm256_loadu_si256(static_cast<const __m256i*>(p)); }
 inline void storeu(void* p, __m256i v) { _mm256_storeu_si256(static_cast<__m256i*>(p), v); }
 
-// Census word of pixel x, as in the scalar reference (used for the tail).
-std::uint64_t censusPixel(const std::uint8_t* win, std::ptrdiff_t stride, int x, int win_w,
-                          int win_h) {
-  const int cx = win_w / 2;
-  const int cy = win_h / 2;
-  const std::uint8_t c = win[cy * stride + cx + x];
-  std::uint64_t word = 0;
-  int k = 0;
-  for (int dy = 0; dy < win_h; ++dy) {
-    const std::uint8_t* r = win + dy * stride + x;
-    for (int dx = 0; dx < win_w; ++dx) {
-      if (dy == cy && dx == cx) continue;
-      if (r[dx] < c) word |= std::uint64_t{1} << (63 - k);
-      ++k;
-    }
-  }
-  return word;
-}
-
 // Byte plane j holds census offsets 8j..8j+7 of 32 pixels, MSB first; it is byte 7 - j of each
 // pixel's word. Transposes the planes into 32 words: unpack 8 -> 16 -> 32 bits within lanes
 // (pixels p and p + 16 share a lane position), then join the lanes.
@@ -100,7 +81,7 @@ void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int wi
     }
     transposeStore(planes, out + x);
   }
-  for (; x < width; ++x) out[x] = censusPixel(win, stride, x, win_w, win_h);
+  if (x < width) scalarKernels().censusRow(win + x, stride, width - x, win_w, win_h, out + x);
 }
 
 // Population count of each 64-bit element (in its low 16 bits, the rest zero).
@@ -256,12 +237,7 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
       storeu(s.best_r + xr, _mm256_blendv_epi8(br, c, lt));
       storeu(s.idx_r + xr, _mm256_blendv_epi8(loadu(s.idx_r + xr), vi, lt));
     }
-    for (; xr < n_right; ++xr) {
-      if (a[xr] < s.best_r[xr]) {
-        s.best_r[xr] = a[xr];
-        s.idx_r[xr] = static_cast<std::int16_t>(i);
-      }
-    }
+    wtaRightTail(a, xr, n_right, i, s);
   }
 }
 

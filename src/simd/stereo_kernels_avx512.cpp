@@ -225,12 +225,7 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
           _mm256_mask_mov_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(s_idx_r + xr)),
                                 upd, vi));
     }
-    for (; xr < n_right; ++xr) {
-      if (a[xr] < s_best_r[xr]) {
-        s_best_r[xr] = a[xr];
-        s_idx_r[xr] = static_cast<std::int16_t>(i0 + p);
-      }
-    }
+    wtaRightTail(a, xr, n_right, i0 + p, s);
   }
 }
 

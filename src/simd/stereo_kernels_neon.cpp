@@ -17,25 +17,6 @@
 namespace svslam::simd {
 namespace {
 
-// Census word of pixel x, as in the scalar reference (used for the tail).
-std::uint64_t censusPixel(const std::uint8_t* win, std::ptrdiff_t stride, int x, int win_w,
-                          int win_h) {
-  const int cx = win_w / 2;
-  const int cy = win_h / 2;
-  const std::uint8_t c = win[cy * stride + cx + x];
-  std::uint64_t word = 0;
-  int k = 0;
-  for (int dy = 0; dy < win_h; ++dy) {
-    const std::uint8_t* r = win + dy * stride + x;
-    for (int dx = 0; dx < win_w; ++dx) {
-      if (dy == cy && dx == cx) continue;
-      if (r[dx] < c) word |= std::uint64_t{1} << (63 - k);
-      ++k;
-    }
-  }
-  return word;
-}
-
 // Byte plane j holds census offsets 8j..8j+7 of 16 pixels, MSB first; it is byte 7 - j of each
 // pixel's word. Transposes the planes into 16 words with zips of 8, 16 and 32 bits.
 inline void transposeStore(const uint8x16_t* pl, std::uint64_t* out) {
@@ -86,7 +67,7 @@ void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int wi
     }
     transposeStore(planes, out + x);
   }
-  for (; x < width; ++x) out[x] = censusPixel(win, stride, x, win_w, win_h);
+  if (x < width) scalarKernels().censusRow(win + x, stride, width - x, win_w, win_h, out + x);
 }
 
 // Population counts of 8 words (p[0..3] hold 2 words each) as 8 uint16.
@@ -230,12 +211,7 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
       vst1q_u16(s.best_r + xr, vminq_u16(br, c));
       vst1q_s16(s.idx_r + xr, vbslq_s16(lt, vi, vld1q_s16(s.idx_r + xr)));
     }
-    for (; xr < n_right; ++xr) {
-      if (a[xr] < s.best_r[xr]) {
-        s.best_r[xr] = a[xr];
-        s.idx_r[xr] = static_cast<std::int16_t>(i);
-      }
-    }
+    wtaRightTail(a, xr, n_right, i, s);
   }
 }
 

@@ -22,6 +22,15 @@ void wtaLeftTail(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, 
   scalarKernels().wtaUpdateRows(agg + x0, stride, n_planes, i0, width - x0, width - x0, t);
 }
 
+void wtaRightTail(const std::uint16_t* cand, int xr0, int n_right, int i, const WtaRowState& s) {
+  for (int xr = xr0; xr < n_right; ++xr) {
+    if (cand[xr] < s.best_r[xr]) {
+      s.best_r[xr] = cand[xr];
+      s.idx_r[xr] = static_cast<std::int16_t>(i);
+    }
+  }
+}
+
 namespace {
 
 void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w, int win_h,
@@ -97,13 +106,7 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
       s.pm2[x] = s.pm1[x];
       if (c < s.pm1[x]) s.pm1[x] = c;
     }
-    for (int x = d0 + i; x < width; ++x) {
-      const int xr = x - (d0 + i);
-      if (a[x] < s.best_r[xr]) {
-        s.best_r[xr] = a[x];
-        s.idx_r[xr] = static_cast<std::int16_t>(i);
-      }
-    }
+    wtaRightTail(a + d0 + i, 0, width - (d0 + i), i, s);
   }
 }
 
