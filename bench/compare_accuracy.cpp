@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "drivers/opencv_view.hpp"
 #include "eval/disparity_metrics.hpp"
 #include "pipeline/cli/stereo_case.hpp"
 
@@ -23,11 +24,6 @@ svslam::ImageF32 fromOpenCv(const cv::Mat& d16, int min_disp) {
       out(x, y) = v < min_disp * 16 ? std::numeric_limits<float>::infinity() : v / 16.0f;
     }
   return out;
-}
-
-cv::Mat asMat(const svslam::ImageU8& img) {
-  return cv::Mat(img.height(), img.width(), CV_8U, const_cast<std::uint8_t*>(img.row(0)),
-                 static_cast<std::size_t>(img.stride()));
 }
 
 void print(const char* method, const std::string& name,
@@ -73,13 +69,13 @@ int main() {
     bm->setTextureThreshold(10);
     bm->setUniquenessRatio(10);
     bm->setDisp12MaxDiff(1);
-    bm->compute(asMat(loaded->left), asMat(loaded->right), d);
+    bm->compute(svslam::io::asMat(loaded->left), svslam::io::asMat(loaded->right), d);
     print("StereoBM", info->name,
           svslam::evaluateDisparity(fromOpenCv(d, 0).cview(), loaded->gt.cview(),
                                     loaded->mask.cview()));
     auto sgbm = cv::StereoSGBM::create(0, nd, 5, 8 * 25, 32 * 25, 1, 63, 10, 100, 2,
                                        cv::StereoSGBM::MODE_SGBM_3WAY);
-    sgbm->compute(asMat(loaded->left), asMat(loaded->right), d);
+    sgbm->compute(svslam::io::asMat(loaded->left), svslam::io::asMat(loaded->right), d);
     print("SGBM-3way", info->name,
           svslam::evaluateDisparity(fromOpenCv(d, 0).cview(), loaded->gt.cview(),
                                     loaded->mask.cview()));

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "drivers/image_io.hpp"
+#include "drivers/opencv_view.hpp"
 #include "drivers/stereo_source.hpp"
 #include "drivers/trajectory_io.hpp"
 #include "drivers/yaml_lists.hpp"
@@ -70,11 +71,6 @@ Result<EurocCamera> readCamera(const fs::path& cam_dir) {
   }
   if (c.files.empty()) return Status::corruptData(csv + ": no image listed");
   return c;
-}
-
-cv::Mat asMat(ImageU8& img) {
-  return cv::Mat(img.height(), img.width(), CV_8U, img.row(0),
-                 static_cast<std::size_t>(img.stride()));
 }
 
 class EurocSource final : public StereoSource {

@@ -12,17 +12,14 @@
 #include <opencv2/imgcodecs.hpp>
 #include <vector>
 
+#include "drivers/opencv_view.hpp"
+
 namespace fs = std::filesystem;
 
 namespace svslam::io {
 namespace {
 
 std::string data(const std::string& sub) { return std::string(SVSLAM_DATA_DIR) + "/" + sub; }
-
-cv::Mat asMat(const ImageU8& img) {
-  return cv::Mat(img.height(), img.width(), CV_8U, const_cast<std::uint8_t*>(img.row(0)),
-                 static_cast<std::size_t>(img.stride()));
-}
 
 // Median |y_left - y_right| of ORB matches that pass a ratio test.
 double medianRowError(const ImageU8& l, const ImageU8& r) {

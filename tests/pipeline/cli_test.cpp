@@ -14,6 +14,7 @@
 #include <string>
 
 #include "drivers/image_io.hpp"
+#include "drivers/opencv_view.hpp"
 #include "drivers/synthetic_pair.hpp"
 
 namespace fs = std::filesystem;
@@ -46,8 +47,7 @@ class Cli : public ::testing::Test {
 
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
   static void writeGrey(const std::string& p, const svslam::ImageU8& img) {
-    cv::Mat m(img.height(), img.width(), CV_8U, const_cast<std::uint8_t*>(img.row(0)),
-              static_cast<std::size_t>(img.stride()));
+    const cv::Mat m = svslam::io::asMat(img);
     ASSERT_TRUE(cv::imwrite(p, m));
   }
   CliRun run(const std::string& args) const {
