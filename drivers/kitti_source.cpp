@@ -122,13 +122,4 @@ Result<std::unique_ptr<StereoSource>> openKittiSource(const std::string& dir) {
       std::make_unique<KittiSource>(c, std::move(left), std::move(right), std::move(t)));
 }
 
-Result<std::unique_ptr<StereoSource>> openStereoSource(const std::string& spec) {
-  const auto colon = spec.find(':');
-  const std::string kind = spec.substr(0, colon);
-  const std::string arg = colon == std::string::npos ? "" : spec.substr(colon + 1);
-  if (kind == "kitti") return openKittiSource(arg);
-  if (kind == "euroc") return openEurocSource(arg);
-  return Status::invalidArgument("unknown source '" + spec + "' (use kitti:DIR or euroc:DIR)");
-}
-
 }  // namespace svslam::io

@@ -4,7 +4,8 @@ set -euo pipefail
 export DEBIAN_FRONTEND=noninteractive
 APT="apt-get -o DPkg::Lock::Timeout=600 -y -q"
 packages=(build-essential cmake pkg-config git
-          libopencv-dev libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev)
+          libopencv-dev libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
+          libyaml-cpp-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
