@@ -10,5 +10,6 @@ int runDisparity(const std::vector<std::string>& args);
 int runEvalDisparity(const std::vector<std::string>& args);
 int runFitSigma(const std::vector<std::string>& args);
 int runEvalTrajectory(const std::vector<std::string>& args);
+int runRun(const std::vector<std::string>& args);
 
 }  // namespace svslam::cli

@@ -17,6 +17,7 @@ constexpr const char* kUsage =
     "  disparity        dense disparity of a rectified stereo pair (census or SAD correlation)\n"
     "  eval-disparity   score a disparity map (given or computed) against ground truth\n"
     "  fit-sigma        fit the curvature -> sigma_d model of the disparity on ground truth\n"
+    "  run              visual odometry on a stereo sequence (default: built-in synthetic flight)\n"
     "  eval-trajectory  drift, ATE and RPE of a trajectory against ground truth (KITTI/TUM/EuRoC)\n"
     "\n"
     "Run 'svslam <command> --help' for the options of a command.\n";
@@ -38,6 +39,7 @@ int main(int argc, char** argv) {
     if (cmd == "disparity") return svslam::cli::runDisparity(args);
     if (cmd == "eval-disparity") return svslam::cli::runEvalDisparity(args);
     if (cmd == "fit-sigma") return svslam::cli::runFitSigma(args);
+    if (cmd == "run") return svslam::cli::runRun(args);
     if (cmd == "eval-trajectory") return svslam::cli::runEvalTrajectory(args);
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "svslam %s: out of memory\n", cmd.c_str());

@@ -137,8 +137,11 @@ Result<TrajectoryMetrics> evaluateTrajectory(const std::vector<Eigen::Isometry3d
     ate += (est_aligned[i].translation() - gt_ref[i].translation()).squaredNorm();
   m.ate_rmse_m = std::sqrt(ate / static_cast<double>(n));
   m.final_pos_err_m = (est_aligned[n - 1].translation() - gt_ref[n - 1].translation()).norm();
-  m.final_att_err_deg =
-      kRadToDeg * rotationAngle(est_aligned[n - 1].linear().transpose() * gt_ref[n - 1].linear());
+  // Attitude from the poses relative to the first one, whatever the alignment: a position-only
+  // alignment leaves the roll about a straight path unobservable.
+  const Eigen::Matrix3d R_est = est[0].linear().transpose() * est[n - 1].linear();
+  const Eigen::Matrix3d R_gt = gt[0].linear().transpose() * gt[n - 1].linear();
+  m.final_att_err_deg = kRadToDeg * rotationAngle(R_est.transpose() * R_gt);
   return m;
 }
 

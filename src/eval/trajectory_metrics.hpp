@@ -32,7 +32,7 @@ struct TrajectoryMetrics {
   double rpe_trans_rmse_m = 0;  // frame-to-frame relative pose error
   double rpe_rot_rmse_deg = 0;
   double final_pos_err_m = 0;
-  double final_att_err_deg = 0;
+  double final_att_err_deg = 0;  // of the last pose relative to the first (alignment-free)
   double path_length_m = 0;  // ground truth
 };
 

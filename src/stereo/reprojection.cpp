@@ -38,6 +38,55 @@ StereoPoint reprojectPixel(const StereoCalibration& calib, double u_px, double v
   return p;
 }
 
+bool neighbourhoodPoint(ImageView<const float> disparity_px, ImageView<const float> sigma_d_px,
+                        const StereoCalibration& calib, double u_px, double v_px,
+                        double matching_error_px, int min_valid, StereoPoint& out) {
+  const bool half = matching_error_px == 0.5;
+  if (!half && matching_error_px != 1.0) return false;
+  const int x0 = static_cast<int>(std::lround(u_px));
+  const int y0 = static_cast<int>(std::lround(v_px));
+  if (x0 < 1 || y0 < 1 || x0 >= disparity_px.width - 1 || y0 >= disparity_px.height - 1)
+    return false;
+  auto valid = [&](int x, int y) {
+    const float d = disparity_px(x, y), s = sigma_d_px(x, y);
+    return std::isfinite(d) && std::isfinite(s) && d > 0.0f;
+  };
+  if (!valid(x0, y0)) return false;
+  const StereoPoint c =
+      reprojectPixel(calib, x0, y0, disparity_px(x0, y0), sigma_d_px(x0, y0), 0.0);
+  Eigen::Vector3d pts[9];
+  Eigen::Matrix3d covs[9];
+  int n = 0;
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      if (dx == 0 && dy == 0) {
+        pts[n] = c.p_cam;
+        covs[n++] = c.cov;
+        continue;
+      }
+      if (!valid(x0 + dx, y0 + dy)) continue;
+      const StereoPoint q = reprojectPixel(calib, x0 + dx, y0 + dy, disparity_px(x0 + dx, y0 + dy),
+                                           sigma_d_px(x0 + dx, y0 + dy), 0.0);
+      pts[n] = half ? Eigen::Vector3d(0.5 * (c.p_cam + q.p_cam)) : q.p_cam;
+      covs[n++] = half ? Eigen::Matrix3d(0.5 * (c.cov + q.cov)) : q.cov;
+    }
+  if (n < min_valid) return false;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int i = 0; i < n; ++i) mean += pts[i];
+  mean /= n;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d e = pts[i] - mean;
+    cov += covs[i] + e * e.transpose();
+  }
+  out = c;
+  out.p_cam = mean;
+  out.cov = cov / n;
+  out.u_px = static_cast<float>(u_px);
+  out.v_px = static_cast<float>(v_px);
+  return true;
+}
+
 Status reprojectDisparity(ImageView<const float> disparity_px, ImageView<const float> sigma_d_px,
                           const StereoCalibration& calib, const ReprojectionParams& params,
                           std::vector<StereoPoint>& out) {

@@ -40,6 +40,18 @@ struct ReprojectionParams {
 StereoPoint reprojectPixel(const StereoCalibration& calib, double u_px, double v_px, double d_px,
                            double sigma_d_px, double sigma_uv_px);
 
+// Observation of a matched point from a dense disparity map, combining the stereo error with
+// the 2D matching error (seed 001 sec 4.1, fig. 4). matching_error_px = 1: the dense 3D points
+// X_i (covariance A_i from sigma_d alone) of the pixel nearest (u, v) and its 8 neighbours;
+// matching_error_px = 0.5: the half-pixel points X_i/2 = (X_0 + X_i) / 2, A_i/2 = (A_0 + A_i) / 2
+// (the surface assumed locally linear). Then
+//     X = 1/n sum X_i,   A = 1/n sum (A_i + (X_i - X)(X_i - X)^T),
+// over the n neighbours with a valid disparity (the centre must be valid, n >= min_valid).
+// Other matching errors are rejected. Returns false when the pixel cannot be observed.
+bool neighbourhoodPoint(ImageView<const float> disparity_px, ImageView<const float> sigma_d_px,
+                        const StereoCalibration& calib, double u_px, double v_px,
+                        double matching_error_px, int min_valid, StereoPoint& out);
+
 // Every valid pixel (finite disparity and sigma) of a disparity map; `out` is cleared first.
 Status reprojectDisparity(ImageView<const float> disparity_px, ImageView<const float> sigma_d_px,
                           const StereoCalibration& calib, const ReprojectionParams& params,

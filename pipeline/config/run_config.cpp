@@ -1,0 +1,133 @@
+#include "pipeline/config/run_config.hpp"
+
+#include "pipeline/config/yaml_config.hpp"
+
+namespace svslam::config {
+namespace {
+
+#define SVSLAM_TRY(expr)             \
+  do {                               \
+    if (Status s_ = (expr); !s_) return s_; \
+  } while (0)
+
+Status readCorners(ConfigReader& r, CornerParams& c) {
+  std::string resp = c.response == CornerResponse::kHarris ? "harris" : "shi-tomasi";
+  SVSLAM_TRY(r.read("detector.response", resp, {"harris", "shi-tomasi"}));
+  c.response = resp == "harris" ? CornerResponse::kHarris : CornerResponse::kShiTomasi;
+  SVSLAM_TRY(r.read("detector.sigma_d_px", c.sigma_d_px, 0.5, 5));
+  SVSLAM_TRY(r.read("detector.sigma_i_px", c.sigma_i_px, 0.5, 10));
+  SVSLAM_TRY(r.read("detector.harris_k", c.harris_k, 0.01, 0.25));
+  SVSLAM_TRY(r.read("detector.threshold_rel", c.threshold_rel, 0, 1));
+  SVSLAM_TRY(r.read("detector.grid_cols", c.grid_cols, 1, 256));
+  SVSLAM_TRY(r.read("detector.grid_rows", c.grid_rows, 1, 256));
+  SVSLAM_TRY(r.read("detector.max_per_cell", c.max_per_cell, 1, 10000));
+  SVSLAM_TRY(r.read("detector.border_px", c.border_px, 1, 200));
+  return Status::ok();
+}
+
+Status readStereoMatch(ConfigReader& r, StereoMatchParams& m) {
+  SVSLAM_TRY(r.read("stereo_match.patch_half_px", m.patch_half_px, 1, 15));
+  SVSLAM_TRY(r.read("stereo_match.min_disp_px", m.min_disp_px, 0, 1024));
+  SVSLAM_TRY(r.read("stereo_match.max_disp_px", m.max_disp_px, 1, 1024));
+  SVSLAM_TRY(r.read("stereo_match.min_zncc", m.min_zncc, -1, 1));
+  SVSLAM_TRY(r.read("stereo_match.ratio", m.ratio, 0.01, 1));
+  SVSLAM_TRY(r.read("stereo_match.prior_radius_px", m.prior_radius_px, 1, 64));
+  SVSLAM_TRY(r.read("stereo_match.continuity_check", m.continuity_check));
+  SVSLAM_TRY(r.read("stereo_match.continuity_threshold_px", m.continuity_threshold_px, 0.01, 1024));
+  SVSLAM_TRY(r.read("stereo_match.recovery", m.recovery));
+  SVSLAM_TRY(r.read("stereo_match.recovery_dist_th_px", m.recovery_dist_th_px, 0.01, 100));
+  SVSLAM_TRY(r.read("stereo_match.recovery_margin_px", m.recovery_margin_px, 0, 64));
+  SVSLAM_TRY(r.read("stereo_match.sigma_d_px", m.sigma_d_px, 0.01, 10));
+  if (m.max_disp_px <= m.min_disp_px)
+    return Status::invalidArgument(r.name() +
+                                   ": key 'stereo_match.max_disp_px' must be > min_disp_px");
+  return Status::ok();
+}
+
+Status readTemporal(ConfigReader& r, TemporalMatchParams& t) {
+  SVSLAM_TRY(r.read("temporal_match.patch_half_px", t.patch_half_px, 1, 15));
+  SVSLAM_TRY(r.read("temporal_match.search_radius_px", t.search_radius_px, 1, 2000));
+  SVSLAM_TRY(r.read("temporal_match.min_zncc", t.min_zncc, -1, 1));
+  SVSLAM_TRY(r.read("temporal_match.ratio", t.ratio, 0.01, 1));
+  SVSLAM_TRY(r.read("temporal_match.group_size", t.group_size, 0, 32));
+  SVSLAM_TRY(r.read("temporal_match.group_n_sigma", t.group_n_sigma, 0.1, 100));
+  SVSLAM_TRY(r.read("temporal_match.group_min_fraction", t.group_min_fraction, 0, 1));
+  return Status::ok();
+}
+
+Status readMotion(ConfigReader& r, VisualMotionParams& m) {
+  SVSLAM_TRY(r.read("motion.max_point_sigma_m", m.max_point_sigma_m, 1e-6, 1e6));
+  SVSLAM_TRY(r.read("motion.gauss_newton_iterations", m.gauss_newton_iterations, 1, 100));
+  SVSLAM_TRY(r.read("motion.k_start", m.k_start, 3, 20));
+  SVSLAM_TRY(r.read("motion.reject_floor", m.reject_floor, 0, 100));
+  SVSLAM_TRY(r.read("motion.min_inliers", m.min_inliers, 3, 10000));
+  SVSLAM_TRY(r.read("motion.ransac", m.ransac));
+  SVSLAM_TRY(r.read("motion.ransac_iterations", m.ransac_iterations, 1, 100000));
+  SVSLAM_TRY(r.read("motion.ransac_chi2", m.ransac_chi2, 0.1, 1000));
+  return Status::ok();
+}
+
+Status readDense(ConfigReader& r, StereoOdometryParams& o) {
+  SVSLAM_TRY(r.read("dense_stereo.enabled", o.dense));
+  DenseStereoParams& d = o.dense_stereo;
+  std::string cost = toString(d.cost);
+  SVSLAM_TRY(r.read("dense_stereo.method", cost, {"census", "sad"}));
+  parseMatchingCost(cost, d.cost);
+  SVSLAM_TRY(r.read("dense_stereo.census_w", d.census_w, 3, 15));
+  SVSLAM_TRY(r.read("dense_stereo.census_h", d.census_h, 3, 15));
+  SVSLAM_TRY(r.read("dense_stereo.window_w", d.window_w, 1, 31));
+  SVSLAM_TRY(r.read("dense_stereo.window_h", d.window_h, 1, 31));
+  SVSLAM_TRY(r.read("dense_stereo.min_disp", d.min_disp, 0, 1024));
+  SVSLAM_TRY(r.read("dense_stereo.max_disp", d.max_disp, 1, 1024));
+  SVSLAM_TRY(r.read("dense_stereo.uniqueness_pct", d.uniqueness_pct, 0, 100));
+  SVSLAM_TRY(r.read("dense_stereo.lr_check", d.lr_check));
+  SVSLAM_TRY(r.read("dense_stereo.lr_max_diff", d.lr_max_diff, 0, 64));
+  if (o.dense) {
+    if (Status s = d.validate(); !s)
+      return Status::invalidArgument(r.name() + ": dense_stereo: " + s.message());
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+static Status parse(ConfigReader& r, RunConfig& out) {
+  SVSLAM_TRY(r.read("source", out.source));
+  SVSLAM_TRY(r.read("max_frames", out.max_frames, 0, 100000000));
+  SVSLAM_TRY(r.read("threads", out.threads, 1, 256));
+  SVSLAM_TRY(r.read("seed", out.seed));
+  StereoOdometryParams& o = out.odometry;
+  SVSLAM_TRY(readCorners(r, o.corners));
+  SVSLAM_TRY(readStereoMatch(r, o.stereo_match));
+  SVSLAM_TRY(readTemporal(r, o.temporal_match));
+  SVSLAM_TRY(readMotion(r, o.motion));
+  SVSLAM_TRY(readDense(r, o));
+  SVSLAM_TRY(r.read("odometry.match_sigma_px", o.match_sigma_px, 0.01, 10));
+  SVSLAM_TRY(r.read("odometry.min_disparity_px", o.min_disparity_px, 0.01, 1024));
+  SVSLAM_TRY(r.read("odometry.max_depth_m", o.max_depth_m, 0.01, 1e9));
+  SVSLAM_TRY(r.read("odometry.min_matches", o.min_matches, 3, 10000));
+  SVSLAM_TRY(r.read("odometry.lost_search_radius_px", o.lost_search_radius_px, 1, 4000));
+  SVSLAM_TRY(r.finish());
+  o.motion.seed = out.seed;
+  o.dense_stereo.num_stripes = out.threads;
+  if (Status s = o.validate(); !s) return Status::invalidArgument(r.name() + ": " + s.message());
+  return Status::ok();
+}
+
+Status parseRunConfig(const std::string& yaml_text, const std::string& name, RunConfig& out) {
+  auto r = ConfigReader::fromString(yaml_text, name);
+  if (!r) return r.status();
+  return parse(*r, out);
+}
+
+Status loadRunConfig(const std::string& path, RunConfig& out) {
+  if (path.empty()) {
+    ConfigReader r;
+    return parse(r, out);
+  }
+  auto r = ConfigReader::fromFile(path);
+  if (!r) return r.status();
+  return parse(*r, out);
+}
+
+}  // namespace svslam::config

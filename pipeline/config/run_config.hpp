@@ -1,0 +1,26 @@
+#pragma once
+// The configuration of `svslam run` (documented example: config/svslam.yaml). Every key is
+// optional; defaults are the struct defaults below and those of the component parameter
+// structs. Unknown keys and out-of-range values are rejected with a message naming the key.
+#include <cstdint>
+#include <string>
+
+#include "core/status.hpp"
+#include "odometry/stereo_odometry.hpp"
+
+namespace svslam::config {
+
+struct RunConfig {
+  std::string source = "synthetic";  // source specification (drivers/stereo_source.hpp)
+  int max_frames = 0;                // 0 = the whole sequence
+  int threads = 1;                   // worker threads of the stages that split work
+  std::uint64_t seed = 1;            // seeds every random choice (RANSAC)
+  StereoOdometryParams odometry;
+};
+
+// Reads `path` (empty: defaults only) into `out`.
+Status loadRunConfig(const std::string& path, RunConfig& out);
+// Same, from YAML text (tests).
+Status parseRunConfig(const std::string& yaml_text, const std::string& name, RunConfig& out);
+
+}  // namespace svslam::config

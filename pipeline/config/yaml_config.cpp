@@ -1,0 +1,174 @@
+#include "pipeline/config/yaml_config.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace svslam::config {
+
+ConfigReader::ConfigReader() : root_(YAML::NodeType::Map), name_("(defaults)") {}
+
+Result<ConfigReader> ConfigReader::fromString(const std::string& text, const std::string& name) {
+  ConfigReader r;
+  r.name_ = name;
+  try {
+    r.root_ = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    return Status::invalidArgument(name + ": not valid YAML: " + e.what());
+  }
+  if (r.root_.IsNull()) r.root_ = YAML::Node(YAML::NodeType::Map);
+  if (!r.root_.IsMap()) return Status::invalidArgument(name + ": the top level must be a map");
+  return r;
+}
+
+Result<ConfigReader> ConfigReader::fromFile(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) return Status::notFound("cannot open configuration file '" + path + "'");
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return fromString(ss.str(), path);
+}
+
+YAML::Node ConfigReader::find(const std::string& key) const {
+  YAML::Node n = YAML::Clone(root_);
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t dot = key.find('.', start);
+    const std::string part = key.substr(start, dot == std::string::npos ? dot : dot - start);
+    if (!n.IsMap()) return YAML::Node(YAML::NodeType::Undefined);
+    YAML::Node child = n[part];
+    if (!child.IsDefined()) return YAML::Node(YAML::NodeType::Undefined);
+    n = child;
+    if (dot == std::string::npos) return n;
+    start = dot + 1;
+  }
+}
+
+bool ConfigReader::has(const std::string& key) const { return find(key).IsDefined(); }
+
+Status ConfigReader::error(const std::string& key, const std::string& what) const {
+  return Status::invalidArgument(name_ + ": key '" + key + "' " + what);
+}
+
+Status ConfigReader::read(const std::string& key, double& v, double min_value, double max_value) {
+  const YAML::Node n = find(key);
+  used_.insert(key);
+  if (!n.IsDefined()) return Status::ok();
+  double x = 0;
+  if (!n.IsScalar() || !YAML::convert<double>::decode(n, x) || !std::isfinite(x))
+    return error(key, "must be a finite number (got '" + (n.IsScalar() ? n.Scalar() : "?") + "')");
+  if (x < min_value || x > max_value) {
+    std::ostringstream ss;
+    ss << "= " << x << " is out of range [" << min_value << ", " << max_value << "]";
+    return error(key, ss.str());
+  }
+  v = x;
+  return Status::ok();
+}
+
+Status ConfigReader::read(const std::string& key, float& v, double min_value, double max_value) {
+  double x = v;
+  if (Status s = read(key, x, min_value, max_value); !s) return s;
+  v = static_cast<float>(x);
+  return Status::ok();
+}
+
+Status ConfigReader::read(const std::string& key, int& v, int min_value, int max_value) {
+  const YAML::Node n = find(key);
+  used_.insert(key);
+  if (!n.IsDefined()) return Status::ok();
+  long long x = 0;
+  if (!n.IsScalar() || !YAML::convert<long long>::decode(n, x))
+    return error(key, "must be an integer (got '" + (n.IsScalar() ? n.Scalar() : "?") + "')");
+  if (x < min_value || x > max_value)
+    return error(key, "= " + std::to_string(x) + " is out of range [" +
+                          std::to_string(min_value) + ", " + std::to_string(max_value) + "]");
+  v = static_cast<int>(x);
+  return Status::ok();
+}
+
+Status ConfigReader::read(const std::string& key, std::uint64_t& v) {
+  const YAML::Node n = find(key);
+  used_.insert(key);
+  if (!n.IsDefined()) return Status::ok();
+  unsigned long long x = 0;
+  if (!n.IsScalar() || n.Scalar().empty() || n.Scalar()[0] == '-' ||
+      !YAML::convert<unsigned long long>::decode(n, x))
+    return error(key, "must be a non-negative integer");
+  v = x;
+  return Status::ok();
+}
+
+Status ConfigReader::read(const std::string& key, bool& v) {
+  const YAML::Node n = find(key);
+  used_.insert(key);
+  if (!n.IsDefined()) return Status::ok();
+  bool x = false;
+  if (!n.IsScalar() || !YAML::convert<bool>::decode(n, x))
+    return error(key, "must be true or false");
+  v = x;
+  return Status::ok();
+}
+
+Status ConfigReader::read(const std::string& key, std::string& v,
+                          const std::vector<std::string>& allowed) {
+  const YAML::Node n = find(key);
+  used_.insert(key);
+  if (!n.IsDefined()) return Status::ok();
+  if (!n.IsScalar()) return error(key, "must be a string");
+  const std::string x = n.Scalar();
+  if (!allowed.empty()) {
+    bool ok = false;
+    std::string list;
+    for (const auto& a : allowed) {
+      ok = ok || a == x;
+      list += (list.empty() ? "" : ", ") + a;
+    }
+    if (!ok) return error(key, "= '" + x + "' is not one of: " + list);
+  }
+  v = x;
+  return Status::ok();
+}
+
+Status ConfigReader::read(const std::string& key, std::vector<double>& v) {
+  const YAML::Node n = find(key);
+  used_.insert(key);
+  if (!n.IsDefined()) return Status::ok();
+  if (!n.IsSequence()) return error(key, "must be a list of numbers");
+  std::vector<double> x;
+  for (const auto& e : n) {
+    double d = 0;
+    if (!e.IsScalar() || !YAML::convert<double>::decode(e, d) || !std::isfinite(d))
+      return error(key, "must be a list of finite numbers");
+    x.push_back(d);
+  }
+  v = x;
+  return Status::ok();
+}
+
+namespace {
+// The first leaf key path under `n` (prefix `prefix`) that is not in `used`.
+bool firstUnused(const YAML::Node& n, const std::string& prefix, const std::set<std::string>& used,
+                 std::string& out) {
+  if (!prefix.empty() && used.count(prefix)) return false;
+  if (!n.IsMap()) {
+    out = prefix;
+    return true;
+  }
+  for (const auto& kv : n) {
+    const std::string k = kv.first.Scalar();
+    const std::string path = prefix.empty() ? k : prefix + "." + k;
+    if (firstUnused(kv.second, path, used, out)) return true;
+  }
+  return false;
+}
+}  // namespace
+
+Status ConfigReader::finish() const {
+  std::string unused;
+  if (firstUnused(root_, "", used_, unused))
+    return Status::invalidArgument(name_ + ": unknown key '" + unused + "'");
+  return Status::ok();
+}
+
+}  // namespace svslam::config

@@ -1,0 +1,48 @@
+#pragma once
+// ConfigReader: strict reading of a YAML configuration file. Keys are dotted paths into nested
+// maps ("stereo_match.min_zncc"). Each read() leaves the target untouched when the key is
+// absent, and fails with a message naming the key on a wrong type or an out-of-range value.
+// finish() fails on the first key of the file that no read() asked for (a typo, a key of an
+// older version), so no setting is silently ignored.
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/status.hpp"
+
+namespace svslam::config {
+
+class ConfigReader {
+ public:
+  // An empty configuration (every key absent).
+  ConfigReader();
+  static Result<ConfigReader> fromFile(const std::string& path);
+  static Result<ConfigReader> fromString(const std::string& text, const std::string& name);
+
+  Status read(const std::string& key, double& v, double min_value, double max_value);
+  Status read(const std::string& key, float& v, double min_value, double max_value);
+  Status read(const std::string& key, int& v, int min_value, int max_value);
+  Status read(const std::string& key, std::uint64_t& v);
+  Status read(const std::string& key, bool& v);
+  // A string, optionally restricted to `allowed` (empty = any).
+  Status read(const std::string& key, std::string& v, const std::vector<std::string>& allowed = {});
+  // A sequence of numbers.
+  Status read(const std::string& key, std::vector<double>& v);
+
+  bool has(const std::string& key) const;
+  // The first key present in the file and never read, as an error; ok when none.
+  Status finish() const;
+  const std::string& name() const { return name_; }
+
+ private:
+  YAML::Node find(const std::string& key) const;  // undefined node when absent
+  Status error(const std::string& key, const std::string& what) const;
+  YAML::Node root_;
+  std::string name_;
+  std::set<std::string> used_;
+};
+
+}  // namespace svslam::config

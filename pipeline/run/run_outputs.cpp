@@ -1,0 +1,112 @@
+#include "pipeline/run/run_outputs.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+namespace svslam::run {
+
+TrajectoryWriter::~TrajectoryWriter() { close(); }
+
+Status TrajectoryWriter::open(const std::string& kitti_path, const std::string& tum_path) {
+  close();
+  kitti_ = std::fopen(kitti_path.c_str(), "w");
+  if (!kitti_)
+    return Status::ioError("cannot create '" + kitti_path + "': " + std::strerror(errno));
+  if (!tum_path.empty()) {
+    tum_ = std::fopen(tum_path.c_str(), "w");
+    if (!tum_) return Status::ioError("cannot create '" + tum_path + "': " + std::strerror(errno));
+  }
+  kitti_path_ = kitti_path;
+  tum_path_ = tum_path;
+  return Status::ok();
+}
+
+Status TrajectoryWriter::append(TimeNs t_ns, const Eigen::Isometry3d& T) {
+  if (!kitti_) return Status::failedPrecondition("trajectory writer is not open");
+  const Eigen::Matrix4d M = T.matrix();
+  if (!M.allFinite()) return Status::invalidArgument("refusing to write a non-finite pose");
+  int n = 0;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c)
+      n = std::fprintf(kitti_, "%s%.9e", r == 0 && c == 0 ? "" : " ", M(r, c));
+  n = std::fprintf(kitti_, "\n");
+  if (n < 0 || std::fflush(kitti_) != 0)
+    return Status::ioError("cannot write '" + kitti_path_ + "': " + std::strerror(errno));
+  if (tum_) {
+    const Eigen::Quaterniond q(T.rotation());
+    const Eigen::Vector3d t = T.translation();
+    n = std::fprintf(tum_, "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n",
+                     static_cast<double>(t_ns) * 1e-9, t.x(), t.y(), t.z(), q.x(), q.y(), q.z(),
+                     q.w());
+    if (n < 0 || std::fflush(tum_) != 0)
+      return Status::ioError("cannot write '" + tum_path_ + "': " + std::strerror(errno));
+  }
+  return Status::ok();
+}
+
+void TrajectoryWriter::close() {
+  if (kitti_) std::fclose(kitti_);
+  if (tum_) std::fclose(tum_);
+  kitti_ = tum_ = nullptr;
+}
+
+void StageTimes::add(const std::string& stage, double ms) {
+  auto it = samples_.find(stage);
+  if (it == samples_.end()) {
+    order_.push_back(stage);
+    it = samples_.emplace(stage, std::vector<double>{}).first;
+  }
+  it->second.push_back(ms);
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const double rank = std::ceil(p / 100.0 * static_cast<double>(v.size()));
+  const std::size_t i = static_cast<std::size_t>(std::clamp(rank, 1.0, static_cast<double>(v.size())));
+  return v[i - 1];
+}
+
+double StageTimes::median(const std::string& stage) const {
+  auto it = samples_.find(stage);
+  return it == samples_.end() ? NAN : percentile(it->second, 50);
+}
+
+std::string StageTimes::json() const {
+  std::ostringstream ss;
+  ss.setf(std::ios::fixed);
+  ss.precision(3);
+  ss << "{";
+  bool first = true;
+  for (const auto& name : order_) {
+    const auto& v = samples_.at(name);
+    ss << (first ? "" : ", ") << "\"" << name << "\": {\"p50_ms\": " << percentile(v, 50)
+       << ", \"p99_ms\": " << percentile(v, 99)
+       << ", \"max_ms\": " << *std::max_element(v.begin(), v.end())
+       << ", \"count\": " << v.size() << "}";
+    first = false;
+  }
+  ss << "}";
+  return ss.str();
+}
+
+Status writeFileAtomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "w");
+  if (!f) return Status::ioError("cannot create '" + tmp + "': " + std::strerror(errno));
+  const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  if (std::fclose(f) != 0 || !ok) {
+    std::remove(tmp.c_str());
+    return Status::ioError("cannot write '" + path + "'");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    return Status::ioError("cannot rename '" + tmp + "' to '" + path + "': " + std::strerror(errno));
+  }
+  return Status::ok();
+}
+
+}  // namespace svslam::run

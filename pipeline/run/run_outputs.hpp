@@ -1,0 +1,57 @@
+#pragma once
+// Output files of `svslam run`, written as the run goes so that nothing already computed is
+// lost when a later frame fails:
+//   trajectory_kitti.txt  one 3x4 row-major [R | t] per input frame (left camera in the first
+//                         left camera's frame, metres),
+//   trajectory_tum.txt    t tx ty tz qx qy qz qw (t in seconds),
+//   groundtruth_kitti.txt the source's exact poses, when it has them (synthetic),
+//   stats.json            written at the end (atomically), also after a failure.
+#include <Eigen/Geometry>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/status.hpp"
+#include "core/time.hpp"
+
+namespace svslam::run {
+
+// One line per pose in a KITTI and a TUM file; each line is flushed when appended.
+class TrajectoryWriter {
+ public:
+  TrajectoryWriter() = default;
+  ~TrajectoryWriter();
+  TrajectoryWriter(const TrajectoryWriter&) = delete;
+  TrajectoryWriter& operator=(const TrajectoryWriter&) = delete;
+  // Creates (truncates) `kitti_path` and, when not empty, `tum_path`.
+  Status open(const std::string& kitti_path, const std::string& tum_path);
+  Status append(TimeNs t_ns, const Eigen::Isometry3d& T);
+  void close();
+
+ private:
+  std::FILE* kitti_ = nullptr;
+  std::FILE* tum_ = nullptr;
+  std::string kitti_path_, tum_path_;
+};
+
+// Per-stage durations in milliseconds, summarised as p50 / p99 / max.
+class StageTimes {
+ public:
+  void add(const std::string& stage, double ms);
+  // {"stage": {"p50_ms": .., "p99_ms": .., "max_ms": .., "count": n}, ...} in insertion order.
+  std::string json() const;
+  double median(const std::string& stage) const;  // NaN when no sample
+
+ private:
+  std::vector<std::string> order_;
+  std::map<std::string, std::vector<double>> samples_;
+};
+
+// Nearest-rank percentile (p in [0, 100]) of `v` (copied, sorted); NaN when empty.
+double percentile(std::vector<double> v, double p);
+
+// Writes `text` to `path` through a temporary file and a rename.
+Status writeFileAtomic(const std::string& path, const std::string& text);
+
+}  // namespace svslam::run

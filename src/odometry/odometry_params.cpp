@@ -1,0 +1,29 @@
+#include <cmath>
+
+#include "odometry/stereo_odometry.hpp"
+
+namespace svslam {
+
+Status StereoOdometryParams::validate() const {
+  if (Status s = corners.validate(); !s) return s;
+  if (Status s = stereo_match.validate(); !s) return s;
+  if (Status s = temporal_match.validate(); !s) return s;
+  if (Status s = motion.validate(); !s) return s;
+  if (dense) {
+    if (Status s = dense_stereo.validate(); !s) return s;
+  }
+  if (!(match_sigma_px > 0.0) || !std::isfinite(match_sigma_px))
+    return Status::invalidArgument("odometry.match_sigma_px must be > 0");
+  if (dense && match_sigma_px != 0.5 && match_sigma_px != 1.0)
+    return Status::invalidArgument(
+        "odometry.match_sigma_px must be 0.5 or 1 with dense stereo (8-neighbour observation)");
+  if (!(min_disparity_px > 0.0) || !std::isfinite(min_disparity_px))
+    return Status::invalidArgument("odometry.min_disparity_px must be > 0");
+  if (!(max_depth_m > 0.0)) return Status::invalidArgument("odometry.max_depth_m must be > 0");
+  if (min_matches < 3) return Status::invalidArgument("odometry.min_matches must be >= 3");
+  if (!(lost_search_radius_px > 0.0f) || !std::isfinite(lost_search_radius_px))
+    return Status::invalidArgument("odometry.lost_search_radius_px must be > 0");
+  return Status::ok();
+}
+
+}  // namespace svslam

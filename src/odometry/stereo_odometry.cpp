@@ -1,0 +1,155 @@
+#include "odometry/stereo_odometry.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "stereo/reprojection.hpp"
+
+namespace svslam {
+
+StereoOdometry::StereoOdometry(const StereoOdometryParams& params, const StereoCalibration& calib)
+    : params_(params),
+      calib_(calib),
+      detector_(params.corners, std::max(calib.width, 1), std::max(calib.height, 1)),
+      stereo_matcher_(params.stereo_match),
+      temporal_matcher_(params.temporal_match),
+      motion_(params.motion) {
+  init_status_ = params.validate();
+  if (init_status_) init_status_ = calib.validate();
+  if (init_status_) init_status_ = detector_.initStatus();
+  if (init_status_ && params.dense) {
+    dense_ = std::make_unique<DenseStereo>(params.dense_stereo, calib.width, calib.height);
+    init_status_ = dense_->initStatus();
+  }
+  if (init_status_) {
+    prev_left_.resize(calib.width, calib.height);
+    corners_.reserve(2048);
+    corner_px_.reserve(2048);
+    stereo_.reserve(2048);
+    prev_.reserve(2048);
+    cur_.reserve(2048);
+    matches_.reserve(2048);
+    pairs_.reserve(2048);
+  }
+}
+
+StereoOdometry::~StereoOdometry() = default;
+
+void StereoOdometry::resetTracking() {
+  has_prev_ = false;
+  last_motion_ = Eigen::Isometry3d::Identity();
+}
+
+void StereoOdometry::buildPoints(ImageView<const std::uint8_t> left) {
+  (void)left;
+  cur_.clear();
+  const double min_d = std::max(params_.min_disparity_px,
+                                calib_.f_px * calib_.baseline_m / params_.max_depth_m);
+  for (const StereoMatch& m : stereo_) {
+    if (!(m.d_px >= min_d)) continue;
+    StereoPoint sp;
+    if (params_.dense) {
+      if (!neighbourhoodPoint(disparity_.disparity_px.cview(), disparity_.sigma_d_px.cview(),
+                              calib_, m.u_px, m.v_px, params_.match_sigma_px, 5, sp))
+        continue;
+    } else {
+      sp = reprojectPixel(calib_, m.u_px, m.v_px, m.d_px, m.sigma_d_px, params_.match_sigma_px);
+    }
+    if (!sp.p_cam.allFinite() || !sp.cov.allFinite()) continue;
+    TrackPoint tp;
+    tp.u_px = m.u_px;
+    tp.v_px = m.v_px;
+    tp.p_cam = sp.p_cam;
+    tp.cov = sp.cov;
+    cur_.push_back(tp);
+  }
+}
+
+Status StereoOdometry::process(ImageView<const std::uint8_t> left,
+                               ImageView<const std::uint8_t> right, OdometryFrameResult& out,
+                               Executor& executor, StageObserver* observer) {
+  if (!init_status_) return init_status_;
+  if (left.width != calib_.width || left.height != calib_.height || right.width != calib_.width ||
+      right.height != calib_.height)
+    return Status::invalidArgument("odometry: image size differs from the calibration's");
+  auto done = [&](const char* stage) {
+    if (observer) observer->stageDone(stage);
+  };
+  out = OdometryFrameResult{};
+  out.frame = frame_++;
+  ImageView<const float> prior;
+  if (dense_) {
+    if (Status s = dense_->process(left, right, disparity_, executor); !s) return s;
+    prior = disparity_.disparity_px.cview();
+    done("dense_stereo");
+  }
+  if (Status s = detector_.process(left, corners_); !s) return s;
+  corner_px_.clear();
+  for (const Corner& c : corners_) corner_px_.emplace_back(c.x_px, c.y_px);
+  out.corners = static_cast<int>(corners_.size());
+  done("detect");
+  if (Status s = stereo_matcher_.process(left, right, corner_px_, prior, stereo_, out.stereo_stats);
+      !s)
+    return s;
+  buildPoints(left);
+  out.stereo_points = static_cast<int>(cur_.size());
+  done("stereo_match");
+
+  Eigen::Isometry3d T_cur_prev = last_motion_;
+  matches_.clear();
+  if (has_prev_) {
+    const PinholeCamera cam = calib_.leftCamera();
+    Status s = temporal_matcher_.process(prev_left_.cview(), prev_, left, cur_, last_motion_, cam,
+                                         matches_, out.temporal_stats);
+    if (!s) return s;
+    if (static_cast<int>(matches_.size()) < params_.min_matches) {
+      out.retried = true;
+      s = temporal_matcher_.process(prev_left_.cview(), prev_, left, cur_,
+                                    Eigen::Isometry3d::Identity(), cam, matches_,
+                                    out.temporal_stats, params_.lost_search_radius_px);
+      if (!s) return s;
+    }
+    out.temporal_matches = static_cast<int>(matches_.size());
+    done("temporal_match");
+
+    pairs_.clear();
+    for (const TemporalMatch& m : matches_) {
+      const TrackPoint& p = prev_[static_cast<std::size_t>(m.prev)];
+      const TrackPoint& c = cur_[static_cast<std::size_t>(m.cur)];
+      pairs_.push_back({p.p_cam, p.cov, c.p_cam, c.cov});
+    }
+    VisualMotionResult vm;
+    if (static_cast<int>(pairs_.size()) < params_.min_matches) {
+      out.failure = "too few temporal matches (" + std::to_string(pairs_.size()) + ")";
+    } else if (Status ms = motion_.process(pairs_, vm); !ms) {
+      out.failure = "motion estimation: " + ms.message();
+    } else if (!vm.T_cur_prev.matrix().allFinite() || !vm.covariance.allFinite()) {
+      out.failure = "motion estimation: non-finite result";
+    } else {
+      out.tracked = true;
+      T_cur_prev = vm.T_cur_prev;
+      out.covariance = vm.covariance;
+      out.inliers = vm.used;
+    }
+    done("motion");
+    last_motion_ = T_cur_prev;
+    T_first_cam_ = T_first_cam_ * T_cur_prev.inverse();
+    out.T_cur_prev = T_cur_prev;
+  } else {
+    done("temporal_match");
+    done("motion");
+    out.T_cur_prev = Eigen::Isometry3d::Identity();
+    out.tracked = out.frame == 0;
+    if (out.frame != 0) out.failure = "tracking reset";
+  }
+  out.T_first_cam = T_first_cam_;
+  // The current frame becomes the previous one.
+  prev_.swap(cur_);
+  for (int y = 0; y < left.height; ++y)
+    std::memcpy(prev_left_.row(y), left.row(y), static_cast<std::size_t>(left.width));
+  has_prev_ = true;
+  return Status::ok();
+}
+
+}  // namespace svslam

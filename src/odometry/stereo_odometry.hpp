@@ -1,0 +1,110 @@
+#pragma once
+// Stereo visual odometry: the front end and visual motion estimation of seed 001 (sec. 2, 3.2,
+// 3.3, 4.1) chained frame to frame.
+//
+// Per frame (rectified pair):
+//  1. optional dense stereo (census, stereo/dense_stereo.hpp): a disparity prior for the point
+//     matcher and, per matched point, the 8-neighbour observation (reprojection.hpp);
+//  2. interest points in the left image (precise Harris or Shi-Tomasi with grid bucketing);
+//  3. stereo matching of the points (features/stereo_point_matcher.hpp) -> 3D points with
+//     covariance: from the dense neighbourhood when dense is on, otherwise from the
+//     triangulation Jacobian with sigma_d and the image-plane matching error match_sigma_px;
+//  4. temporal matching against the previous frame's points, around the position predicted
+//     with the previous motion (constant velocity); on too few matches, retried with the
+//     identity prediction and lost_search_radius_px;
+//  5. visual motion estimation (motion/visual_motion.hpp) -> T_cur_prev and its covariance.
+// Poses: T_first_cam = T_first_prev * T_cur_prev^-1 (left camera in the first left camera's
+// frame, x right, y down, z forward). A frame whose motion cannot be estimated keeps the
+// predicted motion and is reported as not tracked; the next frame continues from it.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/executor.hpp"
+#include "core/image.hpp"
+#include "core/stage_observer.hpp"
+#include "core/status.hpp"
+#include "features/corner_detector.hpp"
+#include "features/stereo_point_matcher.hpp"
+#include "features/temporal_matcher.hpp"
+#include "motion/visual_motion.hpp"
+#include "stereo/dense_stereo.hpp"
+
+namespace svslam {
+
+struct StereoOdometryParams {
+  CornerParams corners;
+  StereoMatchParams stereo_match;
+  TemporalMatchParams temporal_match;
+  VisualMotionParams motion;
+  bool dense = false;  // dense stereo for the prior and the 8-neighbour observation
+  DenseStereoParams dense_stereo;
+  double match_sigma_px = 0.5;  // matching error between consecutive frames, px (seed: 0.5)
+  double min_disparity_px = 1.0;  // points with a smaller disparity are not used, px, > 0
+  double max_depth_m = 1e9;       // points farther than this are not used, m, > 0
+  int min_matches = 12;           // temporal matches needed before a retry, >= 3
+  float lost_search_radius_px = 100.0f;  // search radius of the retry, px, > 0
+  Status validate() const;
+};
+
+struct OdometryFrameResult {
+  int frame = 0;
+  bool tracked = false;    // the motion was estimated from this frame's matches
+  std::string failure;     // why not, when !tracked (empty for the first frame)
+  Eigen::Isometry3d T_cur_prev = Eigen::Isometry3d::Identity();
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();  // [rot, trans]
+  Eigen::Isometry3d T_first_cam = Eigen::Isometry3d::Identity();
+  int corners = 0;
+  int stereo_points = 0;
+  int temporal_matches = 0;
+  int inliers = 0;
+  bool retried = false;
+  StereoMatchStats stereo_stats;
+  TemporalMatchStats temporal_stats;
+};
+
+class StereoOdometry {
+ public:
+  StereoOdometry(const StereoOdometryParams& params, const StereoCalibration& calib);
+  ~StereoOdometry();
+  const Status& initStatus() const { return init_status_; }
+
+  // Processes the next rectified pair (calibration size). `observer`, when given, hears
+  // "dense_stereo" (if enabled), "detect", "stereo_match", "temporal_match", "motion".
+  Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                 OdometryFrameResult& out, Executor& executor, StageObserver* observer = nullptr);
+
+  // Forgets the previous frame: the next frame starts a new segment at the current pose.
+  void resetTracking();
+  // The stereo points of the last processed frame (left image position, 3D, covariance).
+  const std::vector<TrackPoint>& lastPoints() const { return prev_; }
+
+ private:
+  void buildPoints(ImageView<const std::uint8_t> left);
+
+  StereoOdometryParams params_;
+  StereoCalibration calib_;
+  Status init_status_;
+  CornerDetector detector_;
+  StereoPointMatcher stereo_matcher_;
+  TemporalMatcher temporal_matcher_;
+  VisualMotion motion_;
+  std::unique_ptr<DenseStereo> dense_;
+  DisparityResult disparity_;
+  std::vector<Corner> corners_;
+  std::vector<Eigen::Vector2f> corner_px_;
+  std::vector<StereoMatch> stereo_;
+  std::vector<TrackPoint> prev_, cur_;
+  std::vector<TemporalMatch> matches_;
+  std::vector<PointPair> pairs_;
+  ImageU8 prev_left_;
+  bool has_prev_ = false;
+  int frame_ = 0;
+  Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_first_cam_ = Eigen::Isometry3d::Identity();
+};
+
+}  // namespace svslam
