@@ -20,27 +20,39 @@ std::vector<float> gaussian(double sigma, bool derivative) {
   return k;
 }
 
-// Separable convolution with replicated borders: horizontal kernel kx, then vertical ky.
+// Separable convolution with replicated borders: horizontal kernel kx, then vertical ky,
+//   tmp(x, y) = sum_k kx[k + rx] in(x - k, y),   out(x, y) = sum_k ky[k + ry] tmp(x, y - k),
+// coordinates clamped to the image. Loops run over x innermost so they vectorise; `row` is
+// scratch space of at least w + 2 rx floats.
 template <class T>
 void convolve(ImageView<const T> in, const std::vector<float>& kx, const std::vector<float>& ky,
-              ImageF32& tmp, ImageF32& out) {
+              ImageF32& tmp, ImageF32& out, std::vector<float>& row) {
   const int w = in.width, h = in.height;
   const int rx = static_cast<int>(kx.size() / 2), ry = static_cast<int>(ky.size() / 2);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      float s = 0;
-      for (int k = -rx; k <= rx; ++k)
-        s += kx[static_cast<std::size_t>(k + rx)] *
-             static_cast<float>(in(std::clamp(x - k, 0, w - 1), y));
-      tmp(x, y) = s;
+  row.resize(static_cast<std::size_t>(w + 2 * rx));
+  for (int y = 0; y < h; ++y) {
+    const T* src = in.row(y);
+    float* pad = row.data();  // pad[i] = in(clamp(i - rx), y)
+    for (int i = 0; i < rx; ++i) pad[i] = static_cast<float>(src[0]);
+    for (int x = 0; x < w; ++x) pad[x + rx] = static_cast<float>(src[x]);
+    for (int i = 0; i < rx; ++i) pad[w + rx + i] = static_cast<float>(src[w - 1]);
+    float* t = tmp.row(y);
+    for (int x = 0; x < w; ++x) t[x] = 0.0f;
+    for (int k = -rx; k <= rx; ++k) {
+      const float c = kx[static_cast<std::size_t>(k + rx)];
+      const float* p = pad + rx - k;
+      for (int x = 0; x < w; ++x) t[x] += c * p[x];
     }
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      float s = 0;
-      for (int k = -ry; k <= ry; ++k)
-        s += ky[static_cast<std::size_t>(k + ry)] * tmp(x, std::clamp(y - k, 0, h - 1));
-      out(x, y) = s;
+  }
+  for (int y = 0; y < h; ++y) {
+    float* o = out.row(y);
+    for (int x = 0; x < w; ++x) o[x] = 0.0f;
+    for (int k = -ry; k <= ry; ++k) {
+      const float c = ky[static_cast<std::size_t>(k + ry)];
+      const float* t = tmp.row(std::clamp(y - k, 0, h - 1));
+      for (int x = 0; x < w; ++x) o[x] += c * t[x];
     }
+  }
 }
 
 }  // namespace
@@ -79,27 +91,39 @@ Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<
   if (image.width != width_ || image.height != height_)
     return Status::invalidArgument("corner detector built for another image size");
   // Gradients (derivative of Gaussian along one axis, Gaussian along the other).
-  convolve<std::uint8_t>(image, kd_, kg_, tmp_, ix_);
-  convolve<std::uint8_t>(image, kg_, kd_, tmp_, iy_);
-  for (int y = 0; y < height_; ++y)
+  convolve<std::uint8_t>(image, kd_, kg_, tmp_, ix_, row_);
+  convolve<std::uint8_t>(image, kg_, kd_, tmp_, iy_, row_);
+  for (int y = 0; y < height_; ++y) {
+    const float* gx = ix_.row(y);
+    const float* gy = iy_.row(y);
+    float* xx = ixx_.row(y);
+    float* yy = iyy_.row(y);
+    float* xy = ixy_.row(y);
     for (int x = 0; x < width_; ++x) {
-      ixx_(x, y) = ix_(x, y) * ix_(x, y);
-      iyy_(x, y) = iy_(x, y) * iy_(x, y);
-      ixy_(x, y) = ix_(x, y) * iy_(x, y);
+      xx[x] = gx[x] * gx[x];
+      yy[x] = gy[x] * gy[x];
+      xy[x] = gx[x] * gy[x];
     }
-  convolve<float>(ixx_.cview(), ki_, ki_, tmp_, ixx_);
-  convolve<float>(iyy_.cview(), ki_, ki_, tmp_, iyy_);
-  convolve<float>(ixy_.cview(), ki_, ki_, tmp_, ixy_);
+  }
+  convolve<float>(ixx_.cview(), ki_, ki_, tmp_, ixx_, row_);
+  convolve<float>(iyy_.cview(), ki_, ki_, tmp_, iyy_, row_);
+  convolve<float>(ixy_.cview(), ki_, ki_, tmp_, ixy_, row_);
   float max_r = 0;
-  for (int y = 0; y < height_; ++y)
+  const bool harris = params_.response == CornerResponse::kHarris;
+  const double k = params_.harris_k;
+  for (int y = 0; y < height_; ++y) {
+    const float* ra = ixx_.row(y);
+    const float* rb = ixy_.row(y);
+    const float* rc = iyy_.row(y);
+    float* rr = resp_.row(y);
     for (int x = 0; x < width_; ++x) {
-      const double a = ixx_(x, y), b = ixy_(x, y), c = iyy_(x, y);
-      const double r = params_.response == CornerResponse::kHarris
-                           ? a * c - b * b - params_.harris_k * (a + c) * (a + c)
-                           : 0.5 * (a + c) - std::sqrt(0.25 * (a - c) * (a - c) + b * b);
-      resp_(x, y) = static_cast<float>(r);
-      max_r = std::max(max_r, resp_(x, y));
+      const double a = ra[x], b = rb[x], c = rc[x];
+      const double r = harris ? a * c - b * b - k * (a + c) * (a + c)
+                              : 0.5 * (a + c) - std::sqrt(0.25 * (a - c) * (a - c) + b * b);
+      rr[x] = static_cast<float>(r);
+      max_r = std::max(max_r, rr[x]);
     }
+  }
   if (!(max_r > 0)) return Status::ok();  // flat image: no corner
   const float thr = static_cast<float>(params_.threshold_rel) * max_r;
   // Local maxima, bucketed by cell.

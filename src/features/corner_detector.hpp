@@ -50,6 +50,7 @@ class CornerDetector {
   int width_, height_;
   std::vector<float> kd_, kg_, ki_;  // derivative, smoothing and integration kernels
   ImageF32 tmp_, ix_, iy_, ixx_, iyy_, ixy_, resp_;
+  std::vector<float> row_;  // padded row of the horizontal convolution
   std::vector<std::vector<Corner>> cells_;  // bucketing grid, capacity kept between frames
 };
 
