@@ -1,0 +1,120 @@
+// `svslam run` end to end through the executable: outputs, determinism, accuracy on real data
+// (skipped with a message when ../shared/data is absent), and clear errors on bad input with
+// nothing already written lost.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "drivers/trajectory_io.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kKitti = std::string(SVSLAM_DATA_DIR) + "/kitti_odometry_seq_a";
+
+std::string slurp(const std::string& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+int countLines(const std::string& text) {
+  int n = 0;
+  for (char c : text) n += c == '\n';
+  return n;
+}
+
+class Run : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("svslam_run_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  int run(const std::string& args, std::string* err = nullptr) const {
+    const std::string cmd = std::string(SVSLAM_CLI) + " run " + args + " > " +
+                            path("stdout.txt") + " 2> " + path("stderr.txt");
+    const int status = std::system(cmd.c_str());
+    if (err) *err = slurp(path("stderr.txt"));
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+  fs::path dir_;
+};
+
+bool haveKitti() { return fs::exists(kKitti + "/calib.txt"); }
+
+}  // namespace
+
+TEST_F(Run, KittiOutputsAreCompleteAndDeterministic) {
+  if (!haveKitti()) GTEST_SKIP() << "no KITTI data at " << kKitti;
+  ASSERT_EQ(run("--source kitti:" + kKitti + " --max-frames 6 --out " + path("a")), 0);
+  ASSERT_EQ(run("--source kitti:" + kKitti + " --max-frames 6 --out " + path("b")), 0);
+  for (const char* f : {"trajectory_kitti.txt", "trajectory_tum.txt", "stats.json"}) {
+    const std::string a = slurp(path("a/") + f), b = slurp(path("b/") + f);
+    ASSERT_FALSE(a.empty()) << f;
+    if (std::string(f) != "stats.json") {
+      EXPECT_EQ(a, b) << f << " differs between two runs";
+    }
+  }
+  EXPECT_EQ(countLines(slurp(path("a/trajectory_kitti.txt"))), 6);
+  EXPECT_EQ(countLines(slurp(path("a/trajectory_tum.txt"))), 6);
+  const std::string stats = slurp(path("a/stats.json"));
+  for (const char* key : {"\"frames\": 6", "\"frames_without_pose\"", "\"stage_ms\"",
+                          "\"p50_ms\"", "\"p99_ms\"", "\"max_ms\"", "\"front_end\""})
+    EXPECT_NE(stats.find(key), std::string::npos) << key << " missing in " << stats;
+  // The first pose is the identity (KITTI convention).
+  auto t = svslam::io::readTrajectory(path("a/trajectory_kitti.txt"));
+  ASSERT_TRUE(t.isOk());
+  EXPECT_TRUE(t->poses.front().isApprox(Eigen::Isometry3d::Identity()));
+}
+
+TEST_F(Run, BadInputGivesAClearErrorAndNonZeroExit) {
+  std::string err;
+  EXPECT_NE(run("--source nowhere:x --out " + path("o"), &err), 0);
+  EXPECT_NE(err.find("unknown source"), std::string::npos) << err;
+  EXPECT_NE(run("--source kitti:/nonexistent/dir --out " + path("o"), &err), 0);
+  EXPECT_NE(err.find("/nonexistent/dir"), std::string::npos) << err;
+  std::ofstream(path("bad.yaml")) << "stereo_match: {min_zncc: 7}\n";
+  EXPECT_NE(run("--config " + path("bad.yaml") + " --source kitti:" + kKitti, &err), 0);
+  EXPECT_NE(err.find("stereo_match.min_zncc"), std::string::npos) << err;
+  EXPECT_NE(run("--config " + path("missing.yaml"), &err), 0);
+  EXPECT_NE(err.find("missing.yaml"), std::string::npos) << err;
+  EXPECT_NE(run("--max-frames -3", &err), 0);
+  EXPECT_NE(err.find("max-frames"), std::string::npos) << err;
+}
+
+TEST_F(Run, CorruptFrameKeepsWhatWasWritten) {
+  if (!haveKitti()) GTEST_SKIP() << "no KITTI data at " << kKitti;
+  // A copy of the first 5 frames with frame 3 of the left camera truncated.
+  const fs::path seq = dir_ / "seq";
+  fs::create_directories(seq / "image_l");
+  fs::create_directories(seq / "image_r");
+  fs::copy_file(kKitti + "/calib.txt", seq / "calib.txt");
+  std::vector<fs::path> left, right;
+  for (const auto& e : fs::directory_iterator(kKitti + "/image_l")) left.push_back(e.path());
+  for (const auto& e : fs::directory_iterator(kKitti + "/image_r")) right.push_back(e.path());
+  std::sort(left.begin(), left.end());
+  std::sort(right.begin(), right.end());
+  for (int i = 0; i < 5; ++i) {
+    fs::copy_file(left[static_cast<std::size_t>(i)], seq / "image_l" / left[static_cast<std::size_t>(i)].filename());
+    fs::copy_file(right[static_cast<std::size_t>(i)], seq / "image_r" / right[static_cast<std::size_t>(i)].filename());
+  }
+  fs::resize_file(seq / "image_l" / left[3].filename(), 100);
+  std::string err;
+  EXPECT_EQ(run("--source kitti:" + seq.string() + " --out " + path("o"), &err), 1);
+  EXPECT_NE(err.find(left[3].filename().string()), std::string::npos) << err;
+  EXPECT_EQ(countLines(slurp(path("o/trajectory_kitti.txt"))), 3);  // frames 0..2 kept
+  EXPECT_NE(slurp(path("o/stats.json")).find("\"error\""), std::string::npos);
+}

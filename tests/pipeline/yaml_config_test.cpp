@@ -1,0 +1,121 @@
+// Strict YAML configuration: defaults, overrides, and an error naming the key for every kind of
+// bad entry (unknown key, wrong type, out of range, not YAML).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+
+#include "pipeline/config/run_config.hpp"
+#include "pipeline/config/yaml_config.hpp"
+
+using svslam::config::ConfigReader;
+using svslam::config::parseRunConfig;
+using svslam::config::RunConfig;
+
+namespace {
+
+std::string errorOf(const std::string& yaml) {
+  RunConfig c;
+  const svslam::Status s = parseRunConfig(yaml, "test.yaml", c);
+  return s ? "" : s.message();
+}
+
+}  // namespace
+
+TEST(RunConfig, EmptyGivesDefaults) {
+  RunConfig c;
+  ASSERT_TRUE(parseRunConfig("", "empty.yaml", c).isOk());
+  RunConfig d;
+  EXPECT_EQ(c.source, d.source);
+  EXPECT_EQ(c.odometry.stereo_match.max_disp_px, d.odometry.stereo_match.max_disp_px);
+  EXPECT_EQ(c.odometry.temporal_match.search_radius_px, d.odometry.temporal_match.search_radius_px);
+}
+
+TEST(RunConfig, ValuesAreApplied) {
+  RunConfig c;
+  ASSERT_TRUE(parseRunConfig("seed: 42\nthreads: 2\nsource: kitti:/x\n"
+                             "stereo_match: {max_disp_px: 96, min_zncc: 0.7}\n"
+                             "detector: {response: shi-tomasi}\nmotion: {ransac: true}\n"
+                             "dense_stereo: {enabled: true, max_disp: 96}\n",
+                             "t.yaml", c)
+                  .isOk());
+  EXPECT_EQ(c.seed, 42u);
+  EXPECT_EQ(c.odometry.motion.seed, 42u);  // randomness seeded from the config
+  EXPECT_EQ(c.threads, 2);
+  EXPECT_EQ(c.odometry.dense_stereo.num_stripes, 2);
+  EXPECT_EQ(c.source, "kitti:/x");
+  EXPECT_EQ(c.odometry.stereo_match.max_disp_px, 96);
+  EXPECT_FLOAT_EQ(c.odometry.stereo_match.min_zncc, 0.7f);
+  EXPECT_EQ(c.odometry.corners.response, svslam::CornerResponse::kShiTomasi);
+  EXPECT_TRUE(c.odometry.motion.ransac);
+  EXPECT_TRUE(c.odometry.dense);
+  EXPECT_EQ(c.odometry.dense_stereo.max_disp, 96);
+}
+
+TEST(RunConfig, UnknownKeysAreNamed) {
+  EXPECT_NE(errorOf("sead: 3\n").find("'sead'"), std::string::npos);
+  EXPECT_NE(errorOf("stereo_match: {max_disparity: 3}\n").find("'stereo_match.max_disparity'"),
+            std::string::npos);
+  EXPECT_NE(errorOf("detector: {grid: {cols: 3}}\n").find("'detector.grid.cols'"),
+            std::string::npos);
+}
+
+TEST(RunConfig, BadValuesAreNamed) {
+  EXPECT_NE(errorOf("stereo_match: {min_zncc: 3}\n").find("'stereo_match.min_zncc'"),
+            std::string::npos);
+  EXPECT_NE(errorOf("threads: two\n").find("'threads'"), std::string::npos);
+  EXPECT_NE(errorOf("threads: 0\n").find("out of range"), std::string::npos);
+  EXPECT_NE(errorOf("motion: {ransac: maybe}\n").find("'motion.ransac'"), std::string::npos);
+  EXPECT_NE(errorOf("detector: {response: fast}\n").find("harris"), std::string::npos);
+  EXPECT_NE(errorOf("seed: -1\n").find("'seed'"), std::string::npos);
+  EXPECT_NE(errorOf("odometry: {max_depth_m: .nan}\n").find("'odometry.max_depth_m'"),
+            std::string::npos);
+  EXPECT_NE(errorOf("stereo_match: {min_disp_px: 50, max_disp_px: 40}\n")
+                .find("stereo_match.max_disp_px"),
+            std::string::npos);
+  EXPECT_NE(errorOf("dense_stereo: {enabled: true, window_w: 4}\n").find("dense_stereo"),
+            std::string::npos);
+  EXPECT_NE(errorOf("dense_stereo: {enabled: true}\nodometry: {match_sigma_px: 0.7}\n")
+                .find("match_sigma_px"),
+            std::string::npos);
+}
+
+TEST(RunConfig, NotYamlOrNotAMap) {
+  EXPECT_NE(errorOf("a: [1, 2\n").find("not valid YAML"), std::string::npos);
+  EXPECT_NE(errorOf("- 1\n- 2\n").find("top level"), std::string::npos);
+}
+
+TEST(RunConfig, MissingFileIsNamed) {
+  RunConfig c;
+  const svslam::Status s = svslam::config::loadRunConfig("/nonexistent/svslam.yaml", c);
+  ASSERT_FALSE(s.isOk());
+  EXPECT_NE(s.message().find("/nonexistent/svslam.yaml"), std::string::npos);
+}
+
+TEST(RunConfig, ExampleConfigLoadsAtDefaults) {
+  // config/svslam.yaml documents the keys at their defaults: it must load and change nothing.
+  RunConfig c, d;
+  const std::string path = std::string(SVSLAM_SOURCE_DIR) + "/config/svslam.yaml";
+  ASSERT_TRUE(svslam::config::loadRunConfig(path, c).isOk());
+  EXPECT_EQ(c.odometry.stereo_match.max_disp_px, d.odometry.stereo_match.max_disp_px);
+  EXPECT_EQ(c.odometry.corners.max_per_cell, d.odometry.corners.max_per_cell);
+  EXPECT_EQ(c.odometry.temporal_match.group_size, d.odometry.temporal_match.group_size);
+  EXPECT_EQ(c.odometry.dense, d.odometry.dense);
+}
+
+TEST(ConfigReader, TypedReads) {
+  auto r = ConfigReader::fromString("a: {b: 2.5, c: [1, 2, 3]}\nn: 7\n", "x");
+  ASSERT_TRUE(r.isOk());
+  double b = 0;
+  std::vector<double> c;
+  int n = 0, absent = 5;
+  EXPECT_TRUE(r->read("a.b", b, 0, 10).isOk());
+  EXPECT_TRUE(r->read("a.c", c).isOk());
+  EXPECT_TRUE(r->read("n", n, 0, 10).isOk());
+  EXPECT_TRUE(r->read("zz", absent, 0, 10).isOk());
+  EXPECT_EQ(b, 2.5);
+  EXPECT_EQ(c.size(), 3u);
+  EXPECT_EQ(n, 7);
+  EXPECT_EQ(absent, 5);  // absent keys leave the value alone
+  EXPECT_TRUE(r->finish().isOk());
+}
