@@ -1,0 +1,151 @@
+// Stereo visual odometry against ground truth: KITTI drift and EuRoC ATE (the targets,
+// skipped with a message when ../shared/data is absent), determinism, dense mode, bad input.
+#include "odometry/stereo_odometry.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "drivers/stereo_source.hpp"
+#include "drivers/trajectory_io.hpp"
+#include "eval/trajectory_metrics.hpp"
+
+namespace fs = std::filesystem;
+using namespace svslam;
+
+namespace {
+
+const std::string kData = SVSLAM_DATA_DIR;
+const std::string kKitti = kData + "/kitti_odometry_seq_a";
+const std::string kEuroc = kData + "/euroc_mh01_first320";
+
+struct Track {
+  io::TrajectoryFile traj;  // TUM-style, with stamps
+  int tracked = 0;
+};
+
+Track runOdometry(const std::string& spec, const StereoOdometryParams& params, int max_frames) {
+  Track t;
+  auto src = io::openStereoSource(spec);
+  EXPECT_TRUE(src.isOk()) << src.status().message();
+  if (!src) return t;
+  StereoOdometry vo(params, (*src)->calibration());
+  EXPECT_TRUE(vo.initStatus().isOk()) << vo.initStatus().message();
+  SerialExecutor ex;
+  io::StereoFrame f;
+  t.traj.format = io::TrajectoryFormat::kTum;
+  while (max_frames <= 0 || static_cast<int>(t.traj.poses.size()) < max_frames) {
+    auto more = (*src)->next(f);
+    EXPECT_TRUE(more.isOk()) << more.status().message();
+    if (!more || !*more) break;
+    OdometryFrameResult r;
+    EXPECT_TRUE(vo.process(f.left.cview(), f.right.cview(), r, ex).isOk());
+    t.tracked += r.tracked ? 1 : 0;
+    t.traj.t_ns.push_back(f.t_ns);
+    t.traj.poses.push_back(r.T_first_cam);
+  }
+  return t;
+}
+
+}  // namespace
+
+TEST(StereoOdometry, KittiDriftWithinTarget) {
+  if (!fs::exists(kKitti + "/poses.txt")) GTEST_SKIP() << "no KITTI data at " << kKitti;
+  const Track t = runOdometry("kitti:" + kKitti, StereoOdometryParams{}, 0);
+  auto gt = io::readTrajectory(kKitti + "/poses.txt");
+  ASSERT_TRUE(gt.isOk());
+  ASSERT_EQ(t.traj.poses.size(), gt->poses.size());
+  EXPECT_EQ(t.tracked, static_cast<int>(gt->poses.size()));
+  TrajectoryEvalParams ep;
+  ep.segment_lengths_m = {10, 20, 40};
+  ep.step_frames = 1;
+  auto m = evaluateTrajectory(gt->poses, t.traj.poses, ep);
+  ASSERT_TRUE(m.isOk());
+  std::printf("KITTI seq_a: drift %.3f %% (%.4f deg/m), ATE %.3f m, final %.3f m\n", m->t_err_pct,
+              m->r_err_deg_per_m, m->ate_rmse_m, m->final_pos_err_m);
+  for (const auto& s : m->segments) EXPECT_LE(s.t_err_pct, 1.5) << s.length_m << " m segments";
+  EXPECT_LE(m->t_err_pct, 1.5);
+}
+
+TEST(StereoOdometry, EurocAteWithinTarget) {
+  const std::string gt_path = kEuroc + "/groundtruth_per_frame_cam0_times.txt";
+  if (!fs::exists(gt_path)) GTEST_SKIP() << "no EuRoC data at " << kEuroc;
+  const Track t = runOdometry("euroc:" + kEuroc, StereoOdometryParams{}, 0);
+  auto gt = io::readTrajectory(gt_path);
+  ASSERT_TRUE(gt.isOk());
+  auto tbs = io::readEurocTbs(kEuroc + "/mav0/cam0/sensor.yaml");
+  ASSERT_TRUE(tbs.isOk());
+  for (auto& T : gt->poses) T = T * *tbs;  // body -> cam0
+  std::vector<Eigen::Isometry3d> g, e;
+  ASSERT_TRUE(io::associateTrajectories(*gt, t.traj, 0.02, g, e).isOk());
+  ASSERT_GE(g.size(), 300u);
+  TrajectoryEvalParams ep;
+  ep.segment_lengths_m = {1, 2, 4};
+  ep.step_frames = 1;
+  auto m = evaluateTrajectory(g, e, ep);
+  ASSERT_TRUE(m.isOk());
+  std::printf("EuRoC MH01/320: ATE %.4f m, drift %.3f %%, final %.3f m %.2f deg\n", m->ate_rmse_m,
+              m->t_err_pct, m->final_pos_err_m, m->final_att_err_deg);
+  EXPECT_LE(m->ate_rmse_m, 0.10);
+  EXPECT_GE(t.tracked, 300);
+}
+
+TEST(StereoOdometry, SameInputSamePoses) {
+  if (!fs::exists(kKitti + "/calib.txt")) GTEST_SKIP() << "no KITTI data at " << kKitti;
+  StereoOdometryParams p;
+  p.motion.ransac = true;  // seeded: still deterministic
+  const Track a = runOdometry("kitti:" + kKitti, p, 8);
+  const Track b = runOdometry("kitti:" + kKitti, p, 8);
+  ASSERT_EQ(a.traj.poses.size(), 8u);
+  for (std::size_t i = 0; i < a.traj.poses.size(); ++i)
+    EXPECT_TRUE(a.traj.poses[i].matrix() == b.traj.poses[i].matrix()) << "frame " << i;
+}
+
+TEST(StereoOdometry, DenseModeTracksKitti) {
+  if (!fs::exists(kKitti + "/poses.txt")) GTEST_SKIP() << "no KITTI data at " << kKitti;
+  StereoOdometryParams p;
+  p.dense = true;
+  p.dense_stereo.max_disp = 128;
+  const int n = 20;
+  const Track t = runOdometry("kitti:" + kKitti, p, n);
+  auto gt = io::readTrajectory(kKitti + "/poses.txt");
+  ASSERT_TRUE(gt.isOk());
+  gt->poses.resize(n);
+  EXPECT_EQ(t.tracked, n);
+  TrajectoryEvalParams ep;
+  ep.segment_lengths_m = {10};
+  ep.step_frames = 1;
+  auto m = evaluateTrajectory(gt->poses, t.traj.poses, ep);
+  ASSERT_TRUE(m.isOk());
+  std::printf("KITTI seq_a, dense + 8-neighbour observation, %d frames: drift %.3f %%\n", n,
+              m->t_err_pct);
+  EXPECT_LE(m->t_err_pct, 3.0);
+}
+
+TEST(StereoOdometry, BadInput) {
+  StereoCalibration c{700, 320, 240, 0.5, 640, 480};
+  StereoOdometryParams p;
+  StereoOdometry vo(p, c);
+  ASSERT_TRUE(vo.initStatus().isOk());
+  ImageU8 small(320, 240), big(640, 480);
+  SerialExecutor ex;
+  OdometryFrameResult r;
+  EXPECT_FALSE(vo.process(small.cview(), small.cview(), r, ex).isOk());
+  EXPECT_FALSE(vo.process(big.cview(), small.cview(), r, ex).isOk());
+  // A flat image is not an error: no corners, the frame is simply not tracked after the first.
+  EXPECT_TRUE(vo.process(big.cview(), big.cview(), r, ex).isOk());
+  EXPECT_TRUE(vo.process(big.cview(), big.cview(), r, ex).isOk());
+  EXPECT_FALSE(r.tracked);
+  EXPECT_FALSE(r.failure.empty());
+  EXPECT_TRUE(r.T_first_cam.matrix().allFinite());
+
+  StereoCalibration nan_calib = c;
+  nan_calib.f_px = std::nan("");
+  StereoOdometry bad(p, nan_calib);
+  EXPECT_FALSE(bad.initStatus().isOk());
+  p.stereo_match.ratio = 0;
+  StereoOdometry bad2(p, c);
+  EXPECT_NE(bad2.initStatus().message().find("ratio"), std::string::npos);
+}
