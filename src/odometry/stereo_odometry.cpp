@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 #include "stereo/reprojection.hpp"
 
@@ -24,6 +25,7 @@ StereoOdometry::StereoOdometry(const StereoOdometryParams& params, const StereoC
   }
   if (init_status_) {
     prev_left_.resize(calib.width, calib.height);
+    cur_left_.resize(calib.width, calib.height);
     corners_.reserve(2048);
     corner_px_.reserve(2048);
     stereo_.reserve(2048);
@@ -69,6 +71,13 @@ void StereoOdometry::buildPoints(ImageView<const std::uint8_t> left) {
 Status StereoOdometry::process(ImageView<const std::uint8_t> left,
                                ImageView<const std::uint8_t> right, OdometryFrameResult& out,
                                Executor& executor, StageObserver* observer) {
+  if (Status s = frontEnd(left, right, out, executor, observer); !s) return s;
+  return estimateMotion(nullptr, out, observer);
+}
+
+Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
+                                ImageView<const std::uint8_t> right, OdometryFrameResult& out,
+                                Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;
   if (left.width != calib_.width || left.height != calib_.height || right.width != calib_.width ||
       right.height != calib_.height)
@@ -77,7 +86,8 @@ Status StereoOdometry::process(ImageView<const std::uint8_t> left,
     if (observer) observer->stageDone(stage);
   };
   out = OdometryFrameResult{};
-  out.frame = frame_++;
+  out.frame = frame_;
+  in_frame_ = false;
   ImageView<const float> prior;
   if (dense_) {
     if (Status s = dense_->process(left, right, disparity_, executor); !s) return s;
@@ -94,9 +104,10 @@ Status StereoOdometry::process(ImageView<const std::uint8_t> left,
     return s;
   buildPoints(left);
   out.stereo_points = static_cast<int>(cur_.size());
+  for (int y = 0; y < left.height; ++y)
+    std::memcpy(cur_left_.row(y), left.row(y), static_cast<std::size_t>(left.width));
   done("stereo_match");
 
-  Eigen::Isometry3d T_cur_prev = last_motion_;
   matches_.clear();
   if (has_prev_) {
     const PinholeCamera cam = calib_.leftCamera();
@@ -111,10 +122,25 @@ Status StereoOdometry::process(ImageView<const std::uint8_t> left,
       if (!s) return s;
     }
     out.temporal_matches = static_cast<int>(matches_.size());
-    done("temporal_match");
+  }
+  done("temporal_match");
+  in_frame_ = true;
+  return Status::ok();
+}
 
+Status StereoOdometry::estimateMotion(const std::vector<std::uint8_t>* exclude,
+                                      OdometryFrameResult& out, StageObserver* observer) {
+  if (!in_frame_) return Status::failedPrecondition("odometry: estimateMotion without frontEnd");
+  if (exclude && exclude->size() != matches_.size())
+    return Status::invalidArgument("odometry: exclusion mask size differs from the matches");
+  in_frame_ = false;
+  ++frame_;
+  Eigen::Isometry3d T_cur_prev = last_motion_;
+  if (has_prev_) {
     pairs_.clear();
-    for (const TemporalMatch& m : matches_) {
+    for (std::size_t k = 0; k < matches_.size(); ++k) {
+      if (exclude && (*exclude)[k]) continue;
+      const TemporalMatch& m = matches_[k];
       const TrackPoint& p = prev_[static_cast<std::size_t>(m.prev)];
       const TrackPoint& c = cur_[static_cast<std::size_t>(m.cur)];
       pairs_.push_back({p.p_cam, p.cov, c.p_cam, c.cov});
@@ -132,22 +158,19 @@ Status StereoOdometry::process(ImageView<const std::uint8_t> left,
       out.covariance = vm.covariance;
       out.inliers = vm.used;
     }
-    done("motion");
     last_motion_ = T_cur_prev;
     T_first_cam_ = T_first_cam_ * T_cur_prev.inverse();
     out.T_cur_prev = T_cur_prev;
   } else {
-    done("temporal_match");
-    done("motion");
     out.T_cur_prev = Eigen::Isometry3d::Identity();
     out.tracked = out.frame == 0;
     if (out.frame != 0) out.failure = "tracking reset";
   }
+  if (observer) observer->stageDone("motion");
   out.T_first_cam = T_first_cam_;
   // The current frame becomes the previous one.
   prev_.swap(cur_);
-  for (int y = 0; y < left.height; ++y)
-    std::memcpy(prev_left_.row(y), left.row(y), static_cast<std::size_t>(left.width));
+  std::swap(prev_left_, cur_left_);
   has_prev_ = true;
   return Status::ok();
 }

@@ -72,15 +72,31 @@ class StereoOdometry {
   ~StereoOdometry();
   const Status& initStatus() const { return init_status_; }
 
-  // Processes the next rectified pair (calibration size). `observer`, when given, hears
-  // "dense_stereo" (if enabled), "detect", "stereo_match", "temporal_match", "motion".
+  // Processes the next rectified pair (calibration size): frontEnd() then estimateMotion()
+  // with every match. `observer`, when given, hears "dense_stereo" (if enabled), "detect",
+  // "stereo_match", "temporal_match", "motion".
   Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                  OdometryFrameResult& out, Executor& executor, StageObserver* observer = nullptr);
 
+  // The two halves of process(), for a caller (the SLAM filter) that needs to look at the
+  // matches before the motion is estimated. frontEnd() fills points() and matches();
+  // estimateMotion() uses the matches whose `exclude[k]` is 0 (all when `exclude` is null),
+  // updates the pose, and makes the current frame the previous one.
+  Status frontEnd(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                  OdometryFrameResult& out, Executor& executor, StageObserver* observer = nullptr);
+  Status estimateMotion(const std::vector<std::uint8_t>* exclude, OdometryFrameResult& out,
+                        StageObserver* observer = nullptr);
+  // Between frontEnd() and estimateMotion(): this frame's points, the previous frame's points,
+  // and the temporal matches between them (indices into previousPoints() and points()).
+  const std::vector<TrackPoint>& points() const { return cur_; }
+  const std::vector<TrackPoint>& previousPoints() const { return prev_; }
+  const std::vector<TemporalMatch>& matches() const { return matches_; }
+  // This frame's left image (valid between frontEnd() and the next frontEnd()).
+  ImageView<const std::uint8_t> currentLeft() const { return cur_left_.cview(); }
+  const DisparityResult* denseDisparity() const { return dense_ ? &disparity_ : nullptr; }
+
   // Forgets the previous frame: the next frame starts a new segment at the current pose.
   void resetTracking();
-  // The stereo points of the last processed frame (left image position, 3D, covariance).
-  const std::vector<TrackPoint>& lastPoints() const { return prev_; }
 
  private:
   void buildPoints(ImageView<const std::uint8_t> left);
@@ -100,7 +116,8 @@ class StereoOdometry {
   std::vector<TrackPoint> prev_, cur_;
   std::vector<TemporalMatch> matches_;
   std::vector<PointPair> pairs_;
-  ImageU8 prev_left_;
+  ImageU8 prev_left_, cur_left_;
+  bool in_frame_ = false;  // between frontEnd() and estimateMotion()
   bool has_prev_ = false;
   int frame_ = 0;
   Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();
