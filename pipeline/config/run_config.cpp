@@ -89,6 +89,31 @@ Status readDense(ConfigReader& r, StereoOdometryParams& o) {
   return Status::ok();
 }
 
+Status readSlam(ConfigReader& r, SlamSystemParams& p) {
+  SVSLAM_TRY(r.read("slam.max_landmarks", p.ekf.max_landmarks, 1, 3000));
+  SVSLAM_TRY(r.read("slam.max_batch_observations", p.ekf.max_batch_observations, 1, 1000));
+  SVSLAM_TRY(r.read("slam.gate_chi2", p.ekf.gate_chi2, 0.1, 1000));
+  SVSLAM_TRY(r.read("slam.joseph_form", p.ekf.joseph_form));
+  SVSLAM_TRY(r.read("slam.candidate_fraction", p.candidate_fraction, 0.001, 1));
+  SVSLAM_TRY(r.read("slam.candidate_min_frames", p.candidate_min_frames, 2, 1000));
+  SVSLAM_TRY(r.read("slam.candidate_max_sigma_m", p.candidate_max_sigma_m, 1e-6, 1e6));
+  SVSLAM_TRY(r.read("slam.grid_cols", p.grid_cols, 1, 256));
+  SVSLAM_TRY(r.read("slam.grid_rows", p.grid_rows, 1, 256));
+  SVSLAM_TRY(r.read("slam.max_per_cell", p.max_per_cell, 1, 10000));
+  SVSLAM_TRY(r.read("slam.init_sigma_uv_px", p.init_sigma_uv_px, 0.01, 10));
+  SVSLAM_TRY(r.read("slam.track_matching_error_px", p.track_matching_error_px, 0.01, 10));
+  SVSLAM_TRY(r.read("slam.reperception_matching_error_px", p.reperception_matching_error_px, 0.01,
+                    10));
+  SVSLAM_TRY(r.read("slam.reperception_tolerance_px", p.reperception_tolerance_px, 0.01, 100));
+  SVSLAM_TRY(r.read("slam.reperception_max_radius_px", p.reperception_max_radius_px, 0.01, 1000));
+  SVSLAM_TRY(r.read("slam.reperception_min_zncc", p.reperception_min_zncc, -1, 1));
+  SVSLAM_TRY(r.read("slam.patch_half_px", p.patch_half_px, 1, 15));
+  SVSLAM_TRY(r.read("slam.retire_unseen_frames", p.retire_unseen_frames, 1, 100000));
+  SVSLAM_TRY(r.read("slam.lost_rot_sigma_rad", p.lost_rot_sigma_rad, 1e-6, 10));
+  SVSLAM_TRY(r.read("slam.lost_trans_sigma_m", p.lost_trans_sigma_m, 1e-6, 1000));
+  return Status::ok();
+}
+
 }  // namespace
 
 static Status parse(ConfigReader& r, RunConfig& out) {
@@ -96,6 +121,8 @@ static Status parse(ConfigReader& r, RunConfig& out) {
   SVSLAM_TRY(r.read("max_frames", out.max_frames, 0, 100000000));
   SVSLAM_TRY(r.read("threads", out.threads, 1, 256));
   SVSLAM_TRY(r.read("seed", out.seed));
+  SVSLAM_TRY(r.read("mode", out.mode, {"ekf", "vo"}));
+  SVSLAM_TRY(readSlam(r, out.slam));
   StereoOdometryParams& o = out.odometry;
   SVSLAM_TRY(readCorners(r, o.corners));
   SVSLAM_TRY(readStereoMatch(r, o.stereo_match));
@@ -111,6 +138,8 @@ static Status parse(ConfigReader& r, RunConfig& out) {
   o.motion.seed = out.seed;
   o.dense_stereo.num_stripes = out.threads;
   if (Status s = o.validate(); !s) return Status::invalidArgument(r.name() + ": " + s.message());
+  if (Status s = out.slam.validate(); !s)
+    return Status::invalidArgument(r.name() + ": " + s.message());
   return Status::ok();
 }
 

@@ -7,6 +7,7 @@
 
 #include "core/status.hpp"
 #include "odometry/stereo_odometry.hpp"
+#include "slam/slam_system.hpp"
 
 namespace svslam::config {
 
@@ -15,7 +16,9 @@ struct RunConfig {
   int max_frames = 0;                // 0 = the whole sequence
   int threads = 1;                   // worker threads of the stages that split work
   std::uint64_t seed = 1;            // seeds every random choice (RANSAC)
+  std::string mode = "ekf";          // ekf (SLAM filter) | vo (pure visual odometry)
   StereoOdometryParams odometry;
+  SlamSystemParams slam;
 };
 
 // Reads `path` (empty: defaults only) into `out`.

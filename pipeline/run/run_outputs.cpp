@@ -53,6 +53,49 @@ void TrajectoryWriter::close() {
   kitti_ = tum_ = nullptr;
 }
 
+LineWriter::~LineWriter() { close(); }
+
+Status LineWriter::open(const std::string& path) {
+  close();
+  f_ = std::fopen(path.c_str(), "w");
+  if (!f_) return Status::ioError("cannot create '" + path + "': " + std::strerror(errno));
+  path_ = path;
+  return Status::ok();
+}
+
+Status LineWriter::append(const std::string& line) {
+  if (!f_) return Status::failedPrecondition("line writer is not open");
+  if (std::fputs(line.c_str(), f_) < 0 || std::fputc('\n', f_) == EOF || std::fflush(f_) != 0)
+    return Status::ioError("cannot write '" + path_ + "': " + std::strerror(errno));
+  return Status::ok();
+}
+
+void LineWriter::close() {
+  if (f_) std::fclose(f_);
+  f_ = nullptr;
+}
+
+Status writeLandmarksPly(const std::string& path, const std::vector<PlyLandmark>& landmarks) {
+  std::size_t n = 0;
+  for (const auto& l : landmarks) n += l.p_world.allFinite() && l.sigma_m.allFinite() ? 1 : 0;
+  std::ostringstream ss;
+  ss << "ply\nformat ascii 1.0\ncomment svslam landmarks: world frame = first left camera, "
+        "metres; sigma = 1-sigma radii along x, y, z\n"
+     << "element vertex " << n << "\n"
+     << "property float x\nproperty float y\nproperty float z\n"
+     << "property float sigma_x\nproperty float sigma_y\nproperty float sigma_z\n"
+     << "property int id\nproperty uchar active\nproperty int observations\nend_header\n";
+  char buf[256];
+  for (const auto& l : landmarks) {
+    if (!l.p_world.allFinite() || !l.sigma_m.allFinite()) continue;
+    std::snprintf(buf, sizeof buf, "%.6f %.6f %.6f %.6f %.6f %.6f %d %d %d\n", l.p_world.x(),
+                  l.p_world.y(), l.p_world.z(), l.sigma_m.x(), l.sigma_m.y(), l.sigma_m.z(), l.id,
+                  l.active ? 1 : 0, l.observations);
+    ss << buf;
+  }
+  return writeFileAtomic(path, ss.str());
+}
+
 void StageTimes::add(const std::string& stage, double ms) {
   auto it = samples_.find(stage);
   if (it == samples_.end()) {

@@ -35,6 +35,34 @@ class TrajectoryWriter {
   std::string kitti_path_, tum_path_;
 };
 
+// A text file written line by line, each line flushed (pose_covariance.txt: 36 numbers per
+// frame, the 6x6 pose covariance row-major, [rot (rad), trans (m)]).
+class LineWriter {
+ public:
+  LineWriter() = default;
+  ~LineWriter();
+  LineWriter(const LineWriter&) = delete;
+  LineWriter& operator=(const LineWriter&) = delete;
+  Status open(const std::string& path);
+  Status append(const std::string& line);  // adds the newline
+  void close();
+
+ private:
+  std::FILE* f_ = nullptr;
+  std::string path_;
+};
+
+// One landmark of landmarks.ply.
+struct PlyLandmark {
+  int id = 0;
+  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();  // m
+  Eigen::Vector3d sigma_m = Eigen::Vector3d::Zero();  // 1-sigma radii along x, y, z (sqrt diag)
+  bool active = false;                                // in the filter state (else retired)
+  int observations = 0;
+};
+// ASCII PLY: x y z sigma_x sigma_y sigma_z id active observations, written atomically.
+Status writeLandmarksPly(const std::string& path, const std::vector<PlyLandmark>& landmarks);
+
 // Per-stage durations in milliseconds, summarised as p50 / p99 / max.
 class StageTimes {
  public:

@@ -76,6 +76,19 @@ bool StereoPointMatcher::searchRow(ImageView<const std::uint8_t> left,
   return true;
 }
 
+bool StereoPointMatcher::matchPoint(ImageView<const std::uint8_t> left,
+                                    ImageView<const std::uint8_t> right, int x, int y, int d0,
+                                    int d1, StereoMatch& out) {
+  if (!init_status_ || left.width != right.width || left.height != right.height) return false;
+  if (!patchInside(left, x, y, params_.patch_half_px)) return false;
+  d0 = std::max(d0, params_.min_disp_px);
+  d1 = std::min(d1, params_.max_disp_px - 1);
+  out = StereoMatch{};
+  out.u_px = static_cast<float>(x);
+  out.v_px = static_cast<float>(y);
+  return searchRow(left, right, x, y, d0, d1, out);
+}
+
 Status StereoPointMatcher::process(ImageView<const std::uint8_t> left,
                                    ImageView<const std::uint8_t> right,
                                    const std::vector<Eigen::Vector2f>& pts_px,

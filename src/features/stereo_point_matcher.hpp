@@ -72,6 +72,11 @@ class StereoPointMatcher {
                  const std::vector<Eigen::Vector2f>& pts_px, ImageView<const float> prior_disp_px,
                  std::vector<StereoMatch>& out, StereoMatchStats& stats);
 
+  // Row search for one left pixel (x, y) over disparities [d0, d1] (clipped to the parameter
+  // range), with the same acceptance tests as process(); false when not matched.
+  bool matchPoint(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right, int x,
+                  int y, int d0, int d1, StereoMatch& out);
+
  private:
   // Best integer disparity of point (x, y) over [d0, d1]; false when not accepted.
   bool searchRow(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right, int x,

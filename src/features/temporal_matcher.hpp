@@ -40,6 +40,7 @@ struct TrackPoint {
   float u_px = 0, v_px = 0;
   Eigen::Vector3d p_cam = Eigen::Vector3d::Zero();  // metres, left camera frame
   Eigen::Matrix3d cov = Eigen::Matrix3d::Identity();  // m^2
+  float d_px = 0, sigma_d_px = 0;  // disparity and its standard deviation (stereo match)
 };
 
 struct TemporalMatch {

@@ -40,6 +40,7 @@ StereoOdometry::~StereoOdometry() = default;
 
 void StereoOdometry::resetTracking() {
   has_prev_ = false;
+  completed_ = false;
   last_motion_ = Eigen::Isometry3d::Identity();
 }
 
@@ -64,8 +65,20 @@ void StereoOdometry::buildPoints(ImageView<const std::uint8_t> left) {
     tp.v_px = m.v_px;
     tp.p_cam = sp.p_cam;
     tp.cov = sp.cov;
+    tp.d_px = m.d_px;
+    tp.sigma_d_px = m.sigma_d_px;
     cur_.push_back(tp);
   }
+}
+
+bool StereoOdometry::observe(const TrackPoint& p, double matching_error_px,
+                             StereoPoint& out) const {
+  if (dense_)
+    return neighbourhoodPoint(disparity_.disparity_px.cview(), disparity_.sigma_d_px.cview(),
+                              calib_, p.u_px, p.v_px, matching_error_px, 5, out);
+  if (!(p.d_px > 0.0f)) return false;
+  out = reprojectPixel(calib_, p.u_px, p.v_px, p.d_px, p.sigma_d_px, matching_error_px);
+  return out.p_cam.allFinite() && out.cov.allFinite();
 }
 
 Status StereoOdometry::process(ImageView<const std::uint8_t> left,
@@ -88,6 +101,12 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
   out = OdometryFrameResult{};
   out.frame = frame_;
   in_frame_ = false;
+  if (completed_) {  // the last frame becomes the previous one
+    prev_.swap(cur_);
+    std::swap(prev_left_, cur_left_);
+    has_prev_ = true;
+    completed_ = false;
+  }
   ImageView<const float> prior;
   if (dense_) {
     if (Status s = dense_->process(left, right, disparity_, executor); !s) return s;
@@ -168,10 +187,7 @@ Status StereoOdometry::estimateMotion(const std::vector<std::uint8_t>* exclude,
   }
   if (observer) observer->stageDone("motion");
   out.T_first_cam = T_first_cam_;
-  // The current frame becomes the previous one.
-  prev_.swap(cur_);
-  std::swap(prev_left_, cur_left_);
-  has_prev_ = true;
+  completed_ = true;  // becomes the previous frame at the next frontEnd()
   return Status::ok();
 }
 

@@ -32,6 +32,7 @@
 #include "features/temporal_matcher.hpp"
 #include "motion/visual_motion.hpp"
 #include "stereo/dense_stereo.hpp"
+#include "stereo/reprojection.hpp"
 
 namespace svslam {
 
@@ -80,19 +81,24 @@ class StereoOdometry {
 
   // The two halves of process(), for a caller (the SLAM filter) that needs to look at the
   // matches before the motion is estimated. frontEnd() fills points() and matches();
-  // estimateMotion() uses the matches whose `exclude[k]` is 0 (all when `exclude` is null),
-  // updates the pose, and makes the current frame the previous one.
+  // estimateMotion() uses the matches whose `exclude[k]` is 0 (all when `exclude` is null) and
+  // updates the pose; the frame becomes the previous one at the next frontEnd().
   Status frontEnd(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                   OdometryFrameResult& out, Executor& executor, StageObserver* observer = nullptr);
   Status estimateMotion(const std::vector<std::uint8_t>* exclude, OdometryFrameResult& out,
                         StageObserver* observer = nullptr);
-  // Between frontEnd() and estimateMotion(): this frame's points, the previous frame's points,
+  // After frontEnd() (until the next one): this frame's points, the previous frame's points,
   // and the temporal matches between them (indices into previousPoints() and points()).
   const std::vector<TrackPoint>& points() const { return cur_; }
   const std::vector<TrackPoint>& previousPoints() const { return prev_; }
   const std::vector<TemporalMatch>& matches() const { return matches_; }
   // This frame's left image (valid between frontEnd() and the next frontEnd()).
   ImageView<const std::uint8_t> currentLeft() const { return cur_left_.cview(); }
+  // The 3D observation of a point of points() with a given 2D matching error (px): the
+  // 8-neighbour combination of seed 001 sec 4.1 with dense stereo (0.5 or 1 px), else the
+  // triangulation Jacobian with sigma_uv = matching_error_px. False when not observable.
+  bool observe(const TrackPoint& p, double matching_error_px, StereoPoint& out) const;
+  const StereoCalibration& calibration() const { return calib_; }
   const DisparityResult* denseDisparity() const { return dense_ ? &disparity_ : nullptr; }
 
   // Forgets the previous frame: the next frame starts a new segment at the current pose.
@@ -117,7 +123,8 @@ class StereoOdometry {
   std::vector<TemporalMatch> matches_;
   std::vector<PointPair> pairs_;
   ImageU8 prev_left_, cur_left_;
-  bool in_frame_ = false;  // between frontEnd() and estimateMotion()
+  bool in_frame_ = false;   // between frontEnd() and estimateMotion()
+  bool completed_ = false;  // estimateMotion() done, not yet rolled over
   bool has_prev_ = false;
   int frame_ = 0;
   Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();

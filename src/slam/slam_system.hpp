@@ -1,0 +1,129 @@
+#pragma once
+// EKF SLAM over the stereo front end (seed 001 sec 4): the visual motion estimate of the
+// non-landmark matches predicts the pose; landmarks observed in the frame update it.
+//
+// Per frame:
+//  1. front end (StereoOdometry::frontEnd): points and temporal matches; tracks (candidate
+//     flags, track lengths) pass from the previous frame's points to the current ones;
+//  2. VME on the non-landmark, non-candidate matches only (prediction and update decorrelated):
+//     a match is left out when its previous point is a candidate or lies within
+//     landmark_exclusion_px of a landmark observed in the previous frame; prediction with
+//     T_cur_prev and its covariance (when the VME fails: the previous motion with
+//     lost_rot_sigma_rad / lost_trans_sigma_m, documented, not tuned per sequence);
+//  3. observations: every landmark of the state predicted inside the image is searched by ZNCC
+//     of its patch (from its last observation) over the left image, within
+//     tolerance + 3 sigma of its predicted projection (sigma from the pose and landmark
+//     covariances), then matched along the row in the right image around its predicted
+//     disparity. A landmark observed in the previous frame uses the 0.5 px matching error of
+//     consecutive frames and track_tolerance_px; one unseen for longer (re-perception, e.g.
+//     after a loop) the 1 px error and reperception_tolerance_px (seed 001 sec 4.1), at most
+//     max_reperceptions per frame, the best predicted first. Chi-square gating in the filter;
+//  4. landmark selection: about candidate_fraction of the new matches (points matched for the
+//     first time) become candidates, the most precise first, in grid cells holding fewer than
+//     max_per_cell landmarks and candidates (spread over the image); a candidate tracked over
+//     candidate_min_frames consecutive frames whose stereo point is precise enough
+//     (sqrt(trace cov) <= candidate_max_sigma_m) is initialised in the filter with the stereo
+//     error alone (init_sigma_uv_px for the image-plane localisation);
+//  5. bounded cost: at most ekf.max_landmarks in the state; to make room, the landmark unseen
+//     for the longest time (at least retire_unseen_frames) is retired: removed from the state,
+//     kept in the map with its last estimate.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/executor.hpp"
+#include "core/image.hpp"
+#include "core/stage_observer.hpp"
+#include "core/status.hpp"
+#include "odometry/stereo_odometry.hpp"
+#include "slam/ekf_slam.hpp"
+#include "slam/landmark_manager.hpp"
+
+namespace svslam {
+
+struct SlamSystemParams {
+  EkfSlamParams ekf;
+  double candidate_fraction = 0.1;     // share of new matches made candidates, (0, 1]
+  int candidate_min_frames = 3;        // consecutive frames tracked before initialisation, >= 2
+  double candidate_max_sigma_m = 0.5;  // stability: sqrt(trace cov) of the stereo point, m, > 0
+  int grid_cols = 8;                   // representativeness grid over the image, >= 1
+  int grid_rows = 6;
+  int max_per_cell = 3;                // landmarks + candidates per cell and frame, >= 1
+  double init_sigma_uv_px = 0.25;      // image-plane localisation at initialisation, px, > 0
+  double track_matching_error_px = 0.5;     // consecutive frames (seed 001 sec 4.1)
+  double reperception_matching_error_px = 1.0;  // re-perceiving after a loop (seed: 1 px)
+  double track_tolerance_px = 1.5;          // consecutive frames (seed: 1.5 px)
+  double reperception_tolerance_px = 2.5;   // (seed: about 2.5 px)
+  int max_reperceptions = 40;               // re-perception searches per frame, >= 0
+  double landmark_exclusion_px = 2.0;       // see step 2, px, >= 0
+  double reperception_max_radius_px = 60.0;  // cap of the search radius, px
+  float reperception_min_zncc = 0.8f;
+  int patch_half_px = 5;               // appearance patch stored per landmark, 1..15
+  int retire_unseen_frames = 2;        // a landmark unseen for fewer frames is never retired
+  double lost_rot_sigma_rad = 0.035;   // prediction covariance when the VME fails
+  double lost_trans_sigma_m = 0.5;
+  Status validate() const;
+};
+
+struct SlamFrameResult {
+  OdometryFrameResult odometry;  // front end + VME (T_first_cam there is pure odometry)
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // filter estimate
+  Eigen::Matrix<double, 6, 6> pose_cov = Eigen::Matrix<double, 6, 6>::Zero();  // [rot, trans]
+  int landmarks_in_state = 0;
+  int landmarks_in_map = 0;  // in the state + retired
+  int observed = 0;          // landmarks observed (tracked from the previous frame)
+  int reperceived = 0;       // landmarks found again by re-perception
+  int predicted_visible = 0;  // landmarks of the state predicted inside the image
+  int search_no_match = 0;    // ... not found in the left image (ZNCC)
+  int search_no_stereo = 0;   // ... found, but not in the right image
+  int gated = 0;             // observations rejected by the chi-square gate
+  int added = 0;
+  int retired = 0;
+  int candidates = 0;
+  int vme_matches = 0;       // matches given to the VME (non-landmarks)
+};
+
+class SlamSystem {
+ public:
+  SlamSystem(const SlamSystemParams& params, const StereoOdometryParams& odometry,
+             const StereoCalibration& calib);
+  const Status& initStatus() const { return init_status_; }
+
+  // `observer` hears the odometry's stages and "ekf" (prediction, observation, selection).
+  Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                 SlamFrameResult& out, Executor& executor, StageObserver* observer = nullptr);
+
+  // Every landmark ever initialised: in the state (current estimate) or retired.
+  std::vector<MapLandmark> map() const;
+
+ private:
+  void passTracks();
+  // Searches the landmarks of the state in the current pair; fills obs_ / obs_uv_.
+  void searchLandmarks(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                       SlamFrameResult& out);
+  void selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameResult& out);
+  bool makeRoom(SlamFrameResult& out);
+
+  SlamSystemParams params_;
+  StereoCalibration calib_;
+  Status init_status_;
+  StereoOdometry vo_;
+  EkfSlam ekf_;
+  LandmarkManager landmarks_;
+  std::vector<PointTrack> prev_tracks_, cur_tracks_;
+  StereoPointMatcher stereo_;
+  std::vector<std::uint8_t> exclude_;
+  std::vector<LandmarkObservation> obs_;
+  std::vector<Eigen::Vector2f> obs_uv_;  // left image position of each observation
+  std::vector<std::uint8_t> obs_reperceived_;
+  std::vector<Eigen::Vector2f> prev_landmark_uv_, landmark_uv_;  // observed landmarks, px
+  std::vector<ObservationResult> results_;
+  std::vector<float> scores_;
+  std::vector<int> cell_count_;
+  int frame_ = 0;
+};
+
+}  // namespace svslam
