@@ -1,0 +1,529 @@
+// ORB extractor against independent references: cv::FAST for the segment test and score, known
+// image transforms (cv::warpAffine, cv::resize) for orientation, descriptors and scale.
+#include "features/orb_extractor.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <numbers>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <set>
+#include <utility>
+
+#include "features/fast_detector.hpp"
+
+namespace svslam {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// Seeded texture: random filled rectangles, ellipses and triangles of random grey levels and
+// sizes (4..80 px, log-uniform) on a smooth gradient, then a light blur and +-3 grey noise.
+cv::Mat texture(int w, int h, std::uint64_t seed, int shapes = -1) {
+  cv::RNG rng(seed);
+  cv::Mat img(h, w, CV_8U);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      img.at<std::uint8_t>(y, x) =
+          cv::saturate_cast<std::uint8_t>(90 + 40.0 * x / w + 30.0 * y / h);
+  if (shapes < 0) shapes = w * h / 400;
+  for (int i = 0; i < shapes; ++i) {
+    const double size = std::exp(rng.uniform(std::log(4.0), std::log(80.0)));
+    const cv::Point c(rng.uniform(0, w), rng.uniform(0, h));
+    const cv::Scalar grey(rng.uniform(0, 256));
+    switch (rng.uniform(0, 3)) {
+      case 0:
+        cv::rectangle(img,
+                      cv::Rect(c.x, c.y, static_cast<int>(size),
+                               static_cast<int>(size * rng.uniform(0.4, 1.6))),
+                      grey, cv::FILLED);
+        break;
+      case 1:
+        cv::ellipse(img, c,
+                    cv::Size(static_cast<int>(size / 2) + 1, static_cast<int>(size / 3) + 1),
+                    rng.uniform(0.0, 180.0), 0, 360, grey, cv::FILLED, cv::LINE_AA);
+        break;
+      default: {
+        std::vector<cv::Point> tri;
+        for (int k = 0; k < 3; ++k)
+          tri.emplace_back(c.x + static_cast<int>(rng.uniform(-size, size)),
+                           c.y + static_cast<int>(rng.uniform(-size, size)));
+        cv::fillConvexPoly(img, tri, grey, cv::LINE_AA);
+      }
+    }
+  }
+  cv::GaussianBlur(img, img, cv::Size(0, 0), 0.8);
+  cv::Mat noise(h, w, CV_16S);
+  rng.fill(noise, cv::RNG::UNIFORM, -3, 4);
+  cv::Mat out;
+  img.convertTo(img, CV_16S);
+  cv::add(img, noise, img);
+  img.convertTo(out, CV_8U);
+  return out;
+}
+
+ImageU8 toImage(const cv::Mat& m) {
+  ImageU8 img(m.cols, m.rows);
+  for (int y = 0; y < m.rows; ++y)
+    for (int x = 0; x < m.cols; ++x) img(x, y) = m.at<std::uint8_t>(y, x);
+  return img;
+}
+
+struct Features {
+  std::vector<OrbKeypoint> kp;
+  std::vector<OrbDescriptor> desc;
+};
+
+Features extract(const cv::Mat& m, const OrbParams& p = {}) {
+  OrbExtractor ex(p, m.cols, m.rows);
+  EXPECT_TRUE(ex.initStatus().isOk()) << ex.initStatus().message();
+  Features f;
+  const ImageU8 img = toImage(m);
+  const Status s = ex.process(img.cview(), f.kp, f.desc);
+  EXPECT_TRUE(s.isOk()) << s.message();
+  return f;
+}
+
+// Brute-force Hamming nearest neighbour from a to b with Lowe's ratio test.
+std::vector<std::pair<int, int>> matchRatio(const Features& a, const Features& b, double ratio) {
+  std::vector<std::pair<int, int>> out;
+  for (std::size_t i = 0; i < a.desc.size(); ++i) {
+    int best = 1000, second = 1000, best_j = -1;
+    for (std::size_t j = 0; j < b.desc.size(); ++j) {
+      const int d = hammingDistance(a.desc[i], b.desc[j]);
+      if (d < best) {
+        second = best;
+        best = d;
+        best_j = static_cast<int>(j);
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best_j >= 0 && best < ratio * second) out.emplace_back(static_cast<int>(i), best_j);
+  }
+  return out;
+}
+
+cv::Point2d apply(const cv::Mat& m, double x, double y) {
+  return {m.at<double>(0, 0) * x + m.at<double>(0, 1) * y + m.at<double>(0, 2),
+          m.at<double>(1, 0) * x + m.at<double>(1, 1) * y + m.at<double>(1, 2)};
+}
+
+double wrapDeg(double a) {
+  while (a > 180) a -= 360;
+  while (a <= -180) a += 360;
+  return a;
+}
+
+// ---- FAST against OpenCV -------------------------------------------------------------------
+
+void expectFastLikeOpenCv(const cv::Mat& m, int threshold) {
+  const ImageU8 img = toImage(m);
+  std::vector<FastCorner> mine;
+  detectFastCorners(img.cview(), threshold, mine);
+  std::vector<cv::KeyPoint> ref;
+  cv::FAST(m, ref, threshold, false, cv::FastFeatureDetector::TYPE_9_16);
+  std::set<std::pair<int, int>> a, b;
+  for (const auto& c : mine) a.insert({c.x, c.y});
+  for (const auto& k : ref) b.insert({static_cast<int>(k.pt.x), static_cast<int>(k.pt.y)});
+  EXPECT_GT(b.size(), 100u);
+  EXPECT_EQ(a.size(), mine.size());
+  EXPECT_TRUE(a == b) << "threshold " << threshold << ": svslam " << a.size() << " corners, OpenCV "
+                      << b.size();
+  // Scores: OpenCV's response of the corners kept by its 3x3 suppression is the FAST score.
+  cv::FAST(m, ref, threshold, true, cv::FastFeatureDetector::TYPE_9_16);
+  int wrong = 0;
+  for (const auto& k : ref) {
+    const int s = fastCornerScore(img.cview(), static_cast<int>(k.pt.x), static_cast<int>(k.pt.y),
+                                  FastMask::k9of16);
+    wrong += s != static_cast<int>(k.response);
+  }
+  EXPECT_EQ(wrong, 0) << "of " << ref.size() << " scores";
+}
+
+TEST(OrbFast, MatchesOpenCvFastOnSyntheticTexture) {
+  const cv::Mat m = texture(333, 241, 7);
+  for (int t : {5, 12, 20, 40}) expectFastLikeOpenCv(m, t);
+}
+
+TEST(OrbFast, MatchesOpenCvFastOnTsukuba) {
+  const std::string path = std::string(SVSLAM_DATA_DIR) + "/middlebury_v2/tsukuba/imL.png";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "no " << path;
+  const cv::Mat m = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(m.empty());
+  for (int t : {10, 20, 30}) expectFastLikeOpenCv(m, t);
+}
+
+TEST(OrbFast, ScoreIsLargestThresholdStillCorner) {
+  const cv::Mat m = texture(120, 90, 3);
+  const ImageU8 img = toImage(m);
+  const auto o = fastOffsets16(img.stride());
+  for (int y = 3; y < 87; y += 2)
+    for (int x = 3; x < 117; x += 2) {
+      const int s = fastCornerScore(img.cview(), x, y, FastMask::k9of16);
+      const std::uint8_t* p = img.row(y) + x;
+      if (s >= 1) {
+        EXPECT_TRUE(fastIsCorner16(p, o, s)) << x << "," << y;
+      }
+      EXPECT_FALSE(fastIsCorner16(p, o, s + 1)) << x << "," << y;
+    }
+  // A single bright pixel: every ring pixel is darker by 100, so the score is 99 for both masks.
+  ImageU8 dot(9, 9);
+  dot.fill(50);
+  dot(4, 4) = 150;
+  EXPECT_EQ(fastCornerScore(dot.cview(), 4, 4, FastMask::k5of8), 99);
+  EXPECT_EQ(fastCornerScore(dot.cview(), 4, 4, FastMask::k9of16), 99);
+  EXPECT_EQ(fastCornerScore(dot.cview(), 0, 4, FastMask::k5of8), 0);
+}
+
+// ---- pyramid --------------------------------------------------------------------------------
+
+TEST(OrbPyramid, LayerSizesFollowTable1AndMapCentres) {
+  const int w = 301, h = 203;
+  OrbExtractor ex(OrbParams{}, w, h);
+  ASSERT_TRUE(ex.initStatus().isOk());
+  ASSERT_EQ(ex.numLayers(), 8);
+  const double scales[8] = {1, 1.5, 2, 3, 4, 6, 8, 12};
+  // Ramp I = 10 + 0.4 x + 0.3 y: area resampling keeps a linear image linear, so a layer pixel
+  // holds the ramp at its centre X0 = (x + 0.5) t - 0.5 (up to rounding at each stage).
+  ImageU8 img(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      img(x, y) = static_cast<std::uint8_t>(std::lround(10 + 0.4 * x + 0.3 * y));
+  std::vector<OrbKeypoint> kp;
+  std::vector<OrbDescriptor> d;
+  ASSERT_TRUE(ex.process(img.cview(), kp, d).isOk());
+  for (int k = 0; k < 8; ++k) {
+    const double t = scales[k];
+    EXPECT_DOUBLE_EQ(OrbExtractor::layerScale(k), t);
+    const auto l = ex.layer(k);
+    EXPECT_EQ(l.width, static_cast<int>(std::floor(w / t + 1e-9))) << "layer " << k;
+    EXPECT_EQ(l.height, static_cast<int>(std::floor(h / t + 1e-9))) << "layer " << k;
+    double worst = 0;
+    for (int y = 1; y < l.height - 1; ++y)
+      for (int x = 1; x < l.width - 1; ++x) {
+        const double X0 = (x + 0.5) * t - 0.5, Y0 = (y + 0.5) * t - 0.5;
+        worst = std::max(worst, std::abs(l(x, y) - (10 + 0.4 * X0 + 0.3 * Y0)));
+      }
+    EXPECT_LT(worst, 1.01) << "layer " << k;
+  }
+  EXPECT_DOUBLE_EQ(OrbExtractor::layerScale(-1), 2.0 / 3.0);
+  EXPECT_TRUE(ex.layer(8).empty());
+}
+
+// ---- orientation ----------------------------------------------------------------------------
+
+TEST(OrbOrientation, FollowsImageRotation) {
+  // Blobs: blurred triangles and ellipses on a flat background, rotated about the image centre.
+  const int w = 400, h = 400;
+  cv::Mat a(h, w, CV_8U, cv::Scalar(60));
+  cv::RNG rng(11);
+  for (int i = 0; i < 60; ++i) {
+    const cv::Point c(rng.uniform(60, w - 60), rng.uniform(60, h - 60));
+    const cv::Scalar grey(rng.uniform(120, 250));
+    if (i % 2 == 0) {
+      std::vector<cv::Point> tri;
+      for (int k = 0; k < 3; ++k)
+        tri.emplace_back(c.x + rng.uniform(-25, 25), c.y + rng.uniform(-25, 25));
+      cv::fillConvexPoly(a, tri, grey, cv::LINE_AA);
+    } else {
+      cv::ellipse(a, c, cv::Size(rng.uniform(6, 20), rng.uniform(3, 8)), rng.uniform(0.0, 180.0), 0,
+                  300, grey, cv::FILLED, cv::LINE_AA);
+    }
+  }
+  cv::GaussianBlur(a, a, cv::Size(0, 0), 1.0);
+  OrbParams p;
+  p.max_per_cell = 1000;
+  const Features fa = extract(a, p);
+  for (double deg : {37.0, -75.0, 150.0}) {
+    const cv::Mat M =
+        cv::getRotationMatrix2D(cv::Point2f(w / 2.0f - 0.5f, h / 2.0f - 0.5f), deg, 1.0);
+    cv::Mat b;
+    cv::warpAffine(a, b, M, a.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(60));
+    const Features fb = extract(b, p);
+    std::vector<double> err;
+    std::vector<double> signed_err;
+    for (const auto& ka : fa.kp) {
+      const cv::Point2d pb = apply(M, ka.x_px, ka.y_px);
+      const OrbKeypoint* best = nullptr;
+      double best_d = 1.5;
+      for (const auto& kb : fb.kp)
+        if (kb.layer == ka.layer && std::hypot(kb.x_px - pb.x, kb.y_px - pb.y) < best_d) {
+          best_d = std::hypot(kb.x_px - pb.x, kb.y_px - pb.y);
+          best = &kb;
+        }
+      if (!best) continue;
+      // Expected: the keypoint's direction vector carried by the linear part of M.
+      const double dx = std::cos(ka.angle_rad), dy = std::sin(ka.angle_rad);
+      const double ex = M.at<double>(0, 0) * dx + M.at<double>(0, 1) * dy;
+      const double ey = M.at<double>(1, 0) * dx + M.at<double>(1, 1) * dy;
+      const double e = wrapDeg((best->angle_rad - std::atan2(ey, ex)) * 180 / kPi);
+      signed_err.push_back(e);
+      err.push_back(std::abs(e));
+    }
+    ASSERT_GT(err.size(), 30u) << deg;
+    std::sort(err.begin(), err.end());
+    std::sort(signed_err.begin(), signed_err.end());
+    const double bias = signed_err[signed_err.size() / 2];
+    auto within = [&](double lim) {
+      return static_cast<double>(std::upper_bound(err.begin(), err.end(), lim) - err.begin()) /
+             static_cast<double>(err.size());
+    };
+    std::printf(
+        "[orientation] rotation %+.0f deg: %zu repeated keypoints, median error %+.2f deg, "
+        "median |error| %.2f deg, %.0f%% within 5 deg, %.0f%% within 15 deg\n",
+        deg, err.size(), bias, err[err.size() / 2], 100 * within(5), 100 * within(15));
+    EXPECT_LT(std::abs(bias), 1.0) << deg;  // the angle moves by the rotation, no bias
+    EXPECT_LT(err[err.size() / 2], 5.0) << deg;
+    EXPECT_GT(within(5), 0.6) << deg;
+    EXPECT_GT(within(15), 0.9) << deg;
+  }
+}
+
+// ---- descriptor matching --------------------------------------------------------------------
+
+struct MatchStats {
+  int matches = 0, correct = 0;
+  std::vector<double> scale_ratio;  // scale_a / scale_b of the correct matches
+};
+
+// Matches a -> b (ratio test 0.8) and checks each against M (a's level-0 px -> b's), counting
+// only a-keypoints that land inside b at least 20 px from its border.
+MatchStats matchUnder(const cv::Mat& a, const cv::Mat& b, const cv::Mat& M) {
+  OrbParams p;
+  const Features fa = extract(a, p), fb = extract(b, p);
+  MatchStats st;
+  for (const auto& [i, j] : matchRatio(fa, fb, 0.8)) {
+    const auto& ka = fa.kp[static_cast<std::size_t>(i)];
+    const auto& kb = fb.kp[static_cast<std::size_t>(j)];
+    const cv::Point2d pb = apply(M, ka.x_px, ka.y_px);
+    if (pb.x < 20 || pb.y < 20 || pb.x > b.cols - 21 || pb.y > b.rows - 21) continue;
+    ++st.matches;
+    if (std::hypot(kb.x_px - pb.x, kb.y_px - pb.y) <= 2.0) {
+      ++st.correct;
+      st.scale_ratio.push_back(ka.scale / kb.scale);
+    }
+  }
+  return st;
+}
+
+TEST(OrbDescriptor, MatchesUnderRotationAndScale) {
+  const cv::Mat a = texture(640, 480, 21);
+  const cv::Mat M = cv::getRotationMatrix2D(cv::Point2f(319.5f, 239.5f), 30.0, 0.75);
+  cv::Mat b;
+  cv::warpAffine(a, b, M, a.size(), cv::INTER_AREA, cv::BORDER_CONSTANT, cv::Scalar(0));
+  const MatchStats st = matchUnder(a, b, M);
+  std::printf(
+      "[descriptor] rotation 30 deg, scale 0.75: %d of %d ratio-test matches correct (%.1f%%)\n",
+      st.correct, st.matches, 100.0 * st.correct / std::max(1, st.matches));
+  EXPECT_GT(st.matches, 100);
+  EXPECT_GE(st.correct, 0.7 * st.matches);
+}
+
+TEST(OrbDescriptor, MatchesTsukubaRotated) {
+  const std::string path = std::string(SVSLAM_DATA_DIR) + "/middlebury_v2/tsukuba/imL.png";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "no " << path;
+  const cv::Mat a = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(a.empty());
+  const cv::Mat M =
+      cv::getRotationMatrix2D(cv::Point2f(a.cols / 2.0f - 0.5f, a.rows / 2.0f - 0.5f), 30.0, 0.75);
+  cv::Mat b;
+  cv::warpAffine(a, b, M, a.size(), cv::INTER_AREA, cv::BORDER_CONSTANT, cv::Scalar(0));
+  const MatchStats st = matchUnder(a, b, M);
+  std::printf("[descriptor] tsukuba, rotation 30 deg, scale 0.75: %d of %d correct (%.1f%%)\n",
+              st.correct, st.matches, 100.0 * st.correct / std::max(1, st.matches));
+  EXPECT_GT(st.matches, 30);
+  EXPECT_GE(st.correct, 0.7 * st.matches);
+}
+
+TEST(OrbScale, HalvedImageHasHalfTheScale) {
+  const cv::Mat a = texture(800, 600, 5);
+  cv::Mat b;
+  cv::resize(a, b, cv::Size(400, 300), 0, 0, cv::INTER_AREA);
+  // Level-0 pixel centres: x_b = (x_a + 0.5) / 2 - 0.5.
+  cv::Mat M = (cv::Mat_<double>(2, 3) << 0.5, 0, -0.25, 0, 0.5, -0.25);
+  MatchStats st = matchUnder(a, b, M);
+  ASSERT_GT(st.correct, 50);
+  std::sort(st.scale_ratio.begin(), st.scale_ratio.end());
+  const double median = st.scale_ratio[st.scale_ratio.size() / 2];
+  const double q1 = st.scale_ratio[st.scale_ratio.size() / 4];
+  const double q3 = st.scale_ratio[st.scale_ratio.size() * 3 / 4];
+  std::printf(
+      "[scale] 0.5x: %d correct matches of %d, scale ratio median %.3f (quartiles %.3f, "
+      "%.3f)\n",
+      st.correct, st.matches, median, q1, q3);
+  EXPECT_NEAR(median, 2.0, 0.15);
+  EXPECT_GT(q1, 1.6);
+  EXPECT_LT(q3, 2.5);
+}
+
+TEST(OrbDescriptor, HammingDistanceCountsBits) {
+  OrbDescriptor a, b;
+  EXPECT_EQ(hammingDistance(a, b), 0);
+  b.words = {~0ULL, 0, 1, 0x8000000000000001ULL};
+  EXPECT_EQ(hammingDistance(a, b), 64 + 1 + 2);
+  EXPECT_EQ(hammingDistance(b, b), 0);
+  a.words = {~0ULL, ~0ULL, ~0ULL, ~0ULL};
+  EXPECT_EQ(hammingDistance(a, OrbDescriptor{}), 256);
+}
+
+TEST(OrbDescriptor, PatternInsidePatchAndSeeded) {
+  OrbExtractor ex(OrbParams{}, 64, 64);
+  ASSERT_TRUE(ex.initStatus().isOk());
+  ASSERT_EQ(ex.pattern().size(), 256u);
+  for (const auto& p : ex.pattern()) {
+    EXPECT_LE(p[0] * p[0] + p[1] * p[1], 15 * 15);
+    EXPECT_LE(p[2] * p[2] + p[3] * p[3], 15 * 15);
+    EXPECT_FALSE(p[0] == p[2] && p[1] == p[3]);
+  }
+  OrbParams other;
+  other.pattern_seed = 99;
+  OrbExtractor ex2(other, 64, 64);
+  EXPECT_NE(ex.pattern(), ex2.pattern());
+  EXPECT_EQ(ex.pattern(), OrbExtractor(OrbParams{}, 80, 70).pattern());
+}
+
+// ---- extractor behaviour --------------------------------------------------------------------
+
+TEST(OrbExtractor, KeypointsAreConsistentAndBucketed) {
+  const cv::Mat m = texture(480, 320, 9);
+  OrbParams p;
+  p.grid_cols = 4;
+  p.grid_rows = 2;
+  p.max_per_cell = 25;
+  const Features f = extract(m, p);
+  ASSERT_EQ(f.kp.size(), f.desc.size());
+  EXPECT_EQ(f.kp.size(), 8u * 25u);  // a textured image fills every cell
+  std::vector<int> per_cell(8, 0);
+  std::set<int> layers;
+  for (std::size_t i = 0; i < f.kp.size(); ++i) {
+    const auto& k = f.kp[i];
+    EXPECT_GE(k.x_px, 0);
+    EXPECT_GE(k.y_px, 0);
+    EXPECT_LT(k.x_px, m.cols);
+    EXPECT_LT(k.y_px, m.rows);
+    EXPECT_GT(k.score, 0);
+    EXPECT_EQ(k.octave, k.layer / 2);
+    EXPECT_GE(k.scale, OrbExtractor::layerScale(k.layer - 1) - 1e-5);
+    EXPECT_LE(k.scale, OrbExtractor::layerScale(k.layer + 1) + 1e-5);
+    EXPECT_FLOAT_EQ(k.size_px, static_cast<float>(31 * OrbExtractor::layerScale(k.layer)));
+    EXPECT_GT(k.angle_rad, -kPi - 1e-6);
+    EXPECT_LE(k.angle_rad, kPi + 1e-6);
+    const int cell = std::min(3, static_cast<int>(k.x_px * 4 / m.cols)) +
+                     4 * std::min(1, static_cast<int>(k.y_px * 2 / m.rows));
+    per_cell[static_cast<std::size_t>(cell)]++;
+    if (i > 0 && per_cell[static_cast<std::size_t>(cell)] > 1) {
+      EXPECT_LE(k.score, f.kp[i - 1].score) << "strongest first within a cell";
+    }
+    layers.insert(k.layer);
+  }
+  for (int n : per_cell) EXPECT_EQ(n, 25);
+  EXPECT_GE(layers.size(), 4u) << "keypoints come from several pyramid layers";
+  // A flat image has no keypoint.
+  cv::Mat flat(320, 480, CV_8U, cv::Scalar(77));
+  EXPECT_TRUE(extract(flat, p).kp.empty());
+}
+
+TEST(OrbExtractor, DeterministicAndReusable) {
+  const cv::Mat m1 = texture(320, 240, 1), m2 = texture(320, 240, 2);
+  const ImageU8 i1 = toImage(m1), i2 = toImage(m2);
+  OrbExtractor ex(OrbParams{}, 320, 240);
+  std::vector<OrbKeypoint> k1, k2, k3;
+  std::vector<OrbDescriptor> d1, d2, d3;
+  ASSERT_TRUE(ex.process(i1.cview(), k1, d1).isOk());
+  ASSERT_TRUE(ex.process(i2.cview(), k2, d2).isOk());
+  ASSERT_TRUE(ex.process(i1.cview(), k3, d3).isOk());
+  ASSERT_FALSE(k1.empty());
+  ASSERT_EQ(k1.size(), k3.size());
+  EXPECT_EQ(d1, d3);
+  for (std::size_t i = 0; i < k1.size(); ++i) {
+    EXPECT_EQ(k1[i].x_px, k3[i].x_px);
+    EXPECT_EQ(k1[i].y_px, k3[i].y_px);
+    EXPECT_EQ(k1[i].scale, k3[i].scale);
+    EXPECT_EQ(k1[i].angle_rad, k3[i].angle_rad);
+    EXPECT_EQ(k1[i].score, k3[i].score);
+  }
+  EXPECT_NE(d1, d2);
+  // A second extractor gives the same result.
+  OrbExtractor ex2(OrbParams{}, 320, 240);
+  ASSERT_TRUE(ex2.process(i1.cview(), k3, d3).isOk());
+  EXPECT_EQ(d1, d3);
+}
+
+TEST(OrbExtractor, BadParamsAndInputsAreRejected) {
+  EXPECT_TRUE(OrbParams{}.validate().isOk());
+  auto bad = [](auto mutate) {
+    OrbParams p;
+    mutate(p);
+    return !p.validate().isOk() && !OrbExtractor(p, 200, 200).initStatus().isOk();
+  };
+  EXPECT_TRUE(bad([](OrbParams& p) { p.num_octaves = 0; }));
+  EXPECT_TRUE(bad([](OrbParams& p) { p.num_octaves = 5; }));
+  EXPECT_TRUE(bad([](OrbParams& p) { p.fast_threshold = 0; }));
+  EXPECT_TRUE(bad([](OrbParams& p) { p.fast_threshold = 255; }));
+  EXPECT_TRUE(bad([](OrbParams& p) { p.orientation_radius_px = 2; }));
+  EXPECT_TRUE(bad([](OrbParams& p) { p.orientation_radius_px = 16; }));
+  EXPECT_TRUE(bad([](OrbParams& p) { p.blur_sigma_px = 0.1; }));
+  EXPECT_TRUE(bad([](OrbParams& p) { p.blur_sigma_px = std::nan(""); }));
+  EXPECT_TRUE(bad([](OrbParams& p) { p.angle_step_deg = 7; }));
+  EXPECT_TRUE(bad([](OrbParams& p) { p.angle_step_deg = 0; }));
+  EXPECT_TRUE(bad([](OrbParams& p) { p.grid_cols = 0; }));
+  EXPECT_TRUE(bad([](OrbParams& p) { p.grid_rows = 0; }));
+  EXPECT_TRUE(bad([](OrbParams& p) { p.max_per_cell = 0; }));
+  EXPECT_FALSE(OrbExtractor(OrbParams{}, 20, 200).initStatus().isOk());
+  EXPECT_FALSE(OrbExtractor(OrbParams{}, 40, 40).initStatus().isOk());  // d_3 below 4 px
+  OrbParams one;
+  one.num_octaves = 1;
+  EXPECT_TRUE(OrbExtractor(one, 40, 40).initStatus().isOk());
+  // Wrong image size, empty image.
+  OrbExtractor ex(OrbParams{}, 200, 100);
+  ASSERT_TRUE(ex.initStatus().isOk());
+  std::vector<OrbKeypoint> kp(3);
+  std::vector<OrbDescriptor> d(3);
+  ImageU8 other(201, 100);
+  EXPECT_EQ(ex.process(other.cview(), kp, d).code(), StatusCode::kInvalidArgument);
+  EXPECT_TRUE(kp.empty());
+  EXPECT_EQ(ex.process(ImageView<const std::uint8_t>{}, kp, d).code(),
+            StatusCode::kInvalidArgument);
+}
+
+TEST(OrbExtractor, TimingOnKittiSizedImage) {
+  const cv::Mat m = texture(1226, 370, 1226);
+  const ImageU8 img = toImage(m);
+  OrbExtractor ex(OrbParams{}, m.cols, m.rows);
+  std::vector<OrbKeypoint> kp;
+  std::vector<OrbDescriptor> d;
+  ASSERT_TRUE(ex.process(img.cview(), kp, d).isOk());  // warm-up
+  std::vector<FastCorner> level0;
+  detectFastCorners(img.cview(), OrbParams{}.fast_threshold, level0);
+  // Wall time and this thread's CPU time (the machine may be shared).
+  const int runs = 10;
+  std::vector<double> wall_ms, cpu_ms;
+  for (int i = 0; i < runs; ++i) {
+    timespec c0{}, c1{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
+    const auto t0 = std::chrono::steady_clock::now();
+    ASSERT_TRUE(ex.process(img.cview(), kp, d).isOk());
+    wall_ms.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
+    cpu_ms.push_back((c1.tv_sec - c0.tv_sec) * 1e3 + (c1.tv_nsec - c0.tv_nsec) * 1e-6);
+  }
+  std::sort(wall_ms.begin(), wall_ms.end());
+  std::sort(cpu_ms.begin(), cpu_ms.end());
+  std::printf(
+      "[timing] process() 1226x370, default params: wall median %.2f ms (min %.2f), thread CPU "
+      "median %.2f ms (min %.2f); %zu FAST corners on c_0, %zu keypoints out\n",
+      wall_ms[runs / 2], wall_ms[0], cpu_ms[runs / 2], cpu_ms[0], level0.size(), kp.size());
+  EXPECT_FALSE(kp.empty());
+}
+
+}  // namespace
+}  // namespace svslam
