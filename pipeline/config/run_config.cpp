@@ -25,6 +25,23 @@ Status readCorners(ConfigReader& r, CornerParams& c) {
   return Status::ok();
 }
 
+Status readOrb(ConfigReader& r, StereoOdometryParams& o) {
+  std::string kind = o.detector == PointDetector::kOrb ? "orb" : "corners";
+  SVSLAM_TRY(r.read("detector.kind", kind, {"corners", "orb"}));
+  o.detector = kind == "orb" ? PointDetector::kOrb : PointDetector::kCorners;
+  OrbParams& b = o.orb;
+  SVSLAM_TRY(r.read("orb.num_octaves", b.num_octaves, 1, 4));
+  SVSLAM_TRY(r.read("orb.fast_threshold", b.fast_threshold, 1, 254));
+  SVSLAM_TRY(r.read("orb.orientation_radius_px", b.orientation_radius_px, 3, 15));
+  SVSLAM_TRY(r.read("orb.blur_sigma_px", b.blur_sigma_px, 0.5, 4));
+  SVSLAM_TRY(r.read("orb.angle_step_deg", b.angle_step_deg, 1, 45));
+  SVSLAM_TRY(r.read("orb.pattern_seed", b.pattern_seed));
+  SVSLAM_TRY(r.read("orb.grid_cols", b.grid_cols, 1, 256));
+  SVSLAM_TRY(r.read("orb.grid_rows", b.grid_rows, 1, 256));
+  SVSLAM_TRY(r.read("orb.max_per_cell", b.max_per_cell, 1, 10000));
+  return Status::ok();
+}
+
 Status readStereoMatch(ConfigReader& r, StereoMatchParams& m) {
   SVSLAM_TRY(r.read("stereo_match.patch_half_px", m.patch_half_px, 1, 15));
   SVSLAM_TRY(r.read("stereo_match.min_disp_px", m.min_disp_px, 0, 1024));
@@ -125,6 +142,7 @@ static Status parse(ConfigReader& r, RunConfig& out) {
   SVSLAM_TRY(readSlam(r, out.slam));
   StereoOdometryParams& o = out.odometry;
   SVSLAM_TRY(readCorners(r, o.corners));
+  SVSLAM_TRY(readOrb(r, o));
   SVSLAM_TRY(readStereoMatch(r, o.stereo_match));
   SVSLAM_TRY(readTemporal(r, o.temporal_match));
   SVSLAM_TRY(readMotion(r, o.motion));

@@ -6,6 +6,9 @@ namespace svslam {
 
 Status StereoOdometryParams::validate() const {
   if (Status s = corners.validate(); !s) return s;
+  if (detector == PointDetector::kOrb) {
+    if (Status s = orb.validate(); !s) return s;
+  }
   if (Status s = stereo_match.validate(); !s) return s;
   if (Status s = temporal_match.validate(); !s) return s;
   if (Status s = motion.validate(); !s) return s;

@@ -19,6 +19,10 @@ StereoOdometry::StereoOdometry(const StereoOdometryParams& params, const StereoC
   init_status_ = params.validate();
   if (init_status_) init_status_ = calib.validate();
   if (init_status_) init_status_ = detector_.initStatus();
+  if (init_status_ && params.detector == PointDetector::kOrb) {
+    orb_ = std::make_unique<OrbExtractor>(params.orb, calib.width, calib.height);
+    init_status_ = orb_->initStatus();
+  }
   if (init_status_ && params.dense) {
     dense_ = std::make_unique<DenseStereo>(params.dense_stereo, calib.width, calib.height);
     init_status_ = dense_->initStatus();
@@ -113,10 +117,15 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
     prior = disparity_.disparity_px.cview();
     done("dense_stereo");
   }
-  if (Status s = detector_.process(left, corners_); !s) return s;
   corner_px_.clear();
-  for (const Corner& c : corners_) corner_px_.emplace_back(c.x_px, c.y_px);
-  out.corners = static_cast<int>(corners_.size());
+  if (orb_) {
+    if (Status s = orb_->process(left, orb_kp_, orb_desc_); !s) return s;
+    for (const OrbKeypoint& k : orb_kp_) corner_px_.emplace_back(k.x_px, k.y_px);
+  } else {
+    if (Status s = detector_.process(left, corners_); !s) return s;
+    for (const Corner& c : corners_) corner_px_.emplace_back(c.x_px, c.y_px);
+  }
+  out.corners = static_cast<int>(corner_px_.size());
   done("detect");
   if (Status s = stereo_matcher_.process(left, right, corner_px_, prior, stereo_, out.stereo_stats);
       !s)

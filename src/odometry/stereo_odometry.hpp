@@ -5,7 +5,8 @@
 // Per frame (rectified pair):
 //  1. optional dense stereo (census, stereo/dense_stereo.hpp): a disparity prior for the point
 //     matcher and, per matched point, the 8-neighbour observation (reprojection.hpp);
-//  2. interest points in the left image (precise Harris or Shi-Tomasi with grid bucketing);
+//  2. interest points in the left image (precise Harris or Shi-Tomasi with grid bucketing, or
+//     the improved ORB of seed 002: their positions go to the same ZNCC matching);
 //  3. stereo matching of the points (features/stereo_point_matcher.hpp) -> 3D points with
 //     covariance: from the dense neighbourhood when dense is on, otherwise from the
 //     triangulation Jacobian with sigma_d and the image-plane matching error match_sigma_px;
@@ -28,6 +29,7 @@
 #include "core/stage_observer.hpp"
 #include "core/status.hpp"
 #include "features/corner_detector.hpp"
+#include "features/orb_extractor.hpp"
 #include "features/stereo_point_matcher.hpp"
 #include "features/temporal_matcher.hpp"
 #include "motion/visual_motion.hpp"
@@ -36,8 +38,13 @@
 
 namespace svslam {
 
+enum class PointDetector { kCorners, kOrb };
+
 struct StereoOdometryParams {
+  PointDetector detector = PointDetector::kCorners;  // corners: precise Harris / Shi-Tomasi
+                                                     // (corners.response); orb: seed 002 ORB
   CornerParams corners;
+  OrbParams orb;
   StereoMatchParams stereo_match;
   TemporalMatchParams temporal_match;
   VisualMotionParams motion;
@@ -111,6 +118,9 @@ class StereoOdometry {
   StereoCalibration calib_;
   Status init_status_;
   CornerDetector detector_;
+  std::unique_ptr<OrbExtractor> orb_;
+  std::vector<OrbKeypoint> orb_kp_;
+  std::vector<OrbDescriptor> orb_desc_;
   StereoPointMatcher stereo_matcher_;
   TemporalMatcher temporal_matcher_;
   VisualMotion motion_;
