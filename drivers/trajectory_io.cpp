@@ -88,9 +88,11 @@ Result<Eigen::Isometry3d> readEurocTbs(const std::string& sensor_yaml) {
 
 Status associateTrajectories(const TrajectoryFile& gt, const TrajectoryFile& est, double max_dt_s,
                              std::vector<Eigen::Isometry3d>& gt_out,
-                             std::vector<Eigen::Isometry3d>& est_out) {
+                             std::vector<Eigen::Isometry3d>& est_out,
+                             std::vector<std::size_t>* est_index) {
   gt_out.clear();
   est_out.clear();
+  if (est_index) est_index->clear();
   if (gt.t_ns.empty() || est.t_ns.empty()) {
     if (gt.poses.size() != est.poses.size())
       return Status::invalidArgument(
@@ -98,6 +100,8 @@ Status associateTrajectories(const TrajectoryFile& gt, const TrajectoryFile& est
           std::to_string(gt.poses.size()) + " and " + std::to_string(est.poses.size()) + " poses");
     gt_out = gt.poses;
     est_out = est.poses;
+    if (est_index)
+      for (std::size_t i = 0; i < est.poses.size(); ++i) est_index->push_back(i);
     return Status::ok();
   }
   if (!std::is_sorted(gt.t_ns.begin(), gt.t_ns.end()))
@@ -118,6 +122,7 @@ Status associateTrajectories(const TrajectoryFile& gt, const TrajectoryFile& est
     if (best == gt.t_ns.size()) continue;  // no ground truth close enough
     gt_out.push_back(gt.poses[best]);
     est_out.push_back(est.poses[i]);
+    if (est_index) est_index->push_back(i);
   }
   if (gt_out.size() < 3)
     return Status::invalidArgument("fewer than 3 estimate stamps have ground truth within " +

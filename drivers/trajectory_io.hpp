@@ -29,8 +29,10 @@ Result<Eigen::Isometry3d> readEurocTbs(const std::string& sensor_yaml);
 
 // Pairs the poses of two trajectories: by index when either has no timestamps (then the counts
 // must match), else each estimate stamp with the nearest ground-truth stamp within max_dt_s.
+// est_index, when given, receives the index in `est` of each pair.
 Status associateTrajectories(const TrajectoryFile& gt, const TrajectoryFile& est, double max_dt_s,
                              std::vector<Eigen::Isometry3d>& gt_out,
-                             std::vector<Eigen::Isometry3d>& est_out);
+                             std::vector<Eigen::Isometry3d>& est_out,
+                             std::vector<std::size_t>* est_index = nullptr);
 
 }  // namespace svslam::io

@@ -1,10 +1,13 @@
 // svslam eval-trajectory: drift, ATE and RPE of an estimated trajectory against ground truth.
+#include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <cstdlib>
 #include <string>
 #include <vector>
 
 #include "drivers/trajectory_io.hpp"
+#include "drivers/yaml_lists.hpp"
 #include "eval/trajectory_metrics.hpp"
 #include "pipeline/cli/arg_parser.hpp"
 #include "pipeline/cli/commands.hpp"
@@ -29,6 +32,10 @@ int runEvalTrajectory(const std::vector<std::string>& args) {
   p.addOption("align", "se3|none",
               "se3: Umeyama rigid alignment; none: both relative to their first pose", "se3");
   p.addOption("max-dt", "S", "largest stamp difference when pairing TUM files, seconds", "0.02");
+  p.addOption("cov", "FILE",
+              "pose covariances of the estimate (svslam run's pose_covariance.txt: 36 numbers "
+              "per estimate line, [rot rad, trans m]): adds NEES and the share of frames whose "
+              "errors are within 2 sigma");
   p.addOption("body-to-cam", "SENSOR_YAML",
               "EuRoC cam0 sensor.yaml: ground truth T_W_B becomes T_W_B * T_BS");
   if (auto code = parseCommandLine(p, args)) return *code;
@@ -68,7 +75,34 @@ int runEvalTrajectory(const std::vector<std::string>& args) {
     for (auto& T : gt->poses) T = T * *tbs;
   }
   std::vector<Eigen::Isometry3d> g, e;
-  if (Status s = io::associateTrajectories(*gt, *est, *max_dt, g, e); !s) return fail(s);
+  std::vector<std::size_t> est_index;
+  if (Status s = io::associateTrajectories(*gt, *est, *max_dt, g, e, &est_index); !s)
+    return fail(s);
+  std::vector<Eigen::Matrix<double, 6, 6>> covs;
+  if (p.has("cov")) {
+    auto text = io::readTextFile(p.get("cov"));
+    if (!text) return fail(text.status());
+    std::istringstream lines(*text);
+    std::string line;
+    std::vector<Eigen::Matrix<double, 6, 6>> all;
+    int n = 0;
+    while (std::getline(lines, line)) {
+      ++n;
+      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+      std::istringstream ls(line);
+      Eigen::Matrix<double, 6, 6> P;
+      for (int k = 0; k < 36; ++k)
+        if (!(ls >> P(k / 6, k % 6)) || !std::isfinite(P(k / 6, k % 6)))
+          return fail(Status::corruptData(p.get("cov") + ":" + std::to_string(n) +
+                                          ": expected 36 finite numbers"));
+      all.push_back(P);
+    }
+    if (all.size() != est->poses.size())
+      return fail(Status::invalidArgument(
+          p.get("cov") + " has " + std::to_string(all.size()) + " covariances for " +
+          std::to_string(est->poses.size()) + " estimated poses"));
+    for (std::size_t i : est_index) covs.push_back(all[i]);
+  }
   auto m = evaluateTrajectory(g, e, params);
   if (!m) return fail(m.status());
 
@@ -95,6 +129,15 @@ int runEvalTrajectory(const std::vector<std::string>& args) {
       .add("rpe_rot_rmse_deg", m->rpe_rot_rmse_deg)
       .add("final_pos_err_m", m->final_pos_err_m)
       .add("final_att_err_deg", m->final_att_err_deg);
+  if (!covs.empty()) {
+    auto nees = evaluateNees(g, e, covs);
+    if (!nees) return fail(nees.status());
+    j.add("nees_frames", nees->frames)
+        .add("mean_nees", nees->mean_nees)
+        .add("mean_nees_position", nees->mean_nees_position)
+        .add("within_2sigma_pct", nees->within_2sigma_pct, 2)
+        .add("position_within_2sigma_pct", nees->position_within_2sigma_pct, 2);
+  }
   std::printf("%s\n", j.str().c_str());
   return 0;
 }

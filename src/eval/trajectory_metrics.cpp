@@ -1,5 +1,6 @@
 #include "eval/trajectory_metrics.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -143,6 +144,50 @@ Result<TrajectoryMetrics> evaluateTrajectory(const std::vector<Eigen::Isometry3d
   const Eigen::Matrix3d R_gt = gt[0].linear().transpose() * gt[n - 1].linear();
   m.final_att_err_deg = kRadToDeg * rotationAngle(R_est.transpose() * R_gt);
   return m;
+}
+
+Result<NeesResult> evaluateNees(const std::vector<Eigen::Isometry3d>& gt,
+                                const std::vector<Eigen::Isometry3d>& est,
+                                const std::vector<Eigen::Matrix<double, 6, 6>>& cov) {
+  if (gt.size() != est.size() || est.size() != cov.size())
+    return Status::invalidArgument("NEES: ground truth, estimate and covariances differ in count");
+  if (gt.empty()) return Status::invalidArgument("NEES: empty trajectories");
+  NeesResult r;
+  const Eigen::Isometry3d g0 = gt[0].inverse(), e0 = est[0].inverse();
+  double sum = 0, sum_pos = 0;
+  int in2 = 0, in2_pos = 0;
+  for (std::size_t i = 0; i < gt.size(); ++i) {
+    const Eigen::Matrix<double, 6, 6>& P = cov[i];
+    if (!P.allFinite()) return Status::invalidArgument("NEES: covariance " + std::to_string(i) + " is not finite");
+    Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(P);
+    if (llt.info() != Eigen::Success || P.diagonal().minCoeff() <= 0) continue;
+    const Eigen::Isometry3d G = g0 * gt[i], E = e0 * est[i];
+    Eigen::Matrix<double, 6, 1> e;
+    const Eigen::AngleAxisd aa(G.linear() * E.linear().transpose());
+    e.head<3>() = aa.angle() * aa.axis();
+    e.tail<3>() = G.translation() - E.translation();
+    const double nees = e.dot(llt.solve(e));
+    const Eigen::Matrix3d Pp = P.bottomRightCorner<3, 3>();
+    const double nees_pos = e.tail<3>().dot(Pp.ldlt().solve(e.tail<3>()));
+    bool all = true, pos = true;
+    for (int k = 0; k < 6; ++k) {
+      const bool ok = std::abs(e(k)) <= 2.0 * std::sqrt(P(k, k));
+      all = all && ok;
+      if (k >= 3) pos = pos && ok;
+    }
+    in2 += all;
+    in2_pos += pos;
+    sum += nees;
+    sum_pos += nees_pos;
+    r.nees.push_back(nees);
+    ++r.frames;
+  }
+  if (r.frames == 0) return Status::invalidArgument("NEES: no frame has a positive covariance");
+  r.mean_nees = sum / r.frames;
+  r.mean_nees_position = sum_pos / r.frames;
+  r.within_2sigma_pct = 100.0 * in2 / r.frames;
+  r.position_within_2sigma_pct = 100.0 * in2_pos / r.frames;
+  return r;
 }
 
 }  // namespace svslam

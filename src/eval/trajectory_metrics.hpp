@@ -55,4 +55,22 @@ Result<TrajectoryMetrics> evaluateTrajectory(const std::vector<Eigen::Isometry3d
                                              const std::vector<Eigen::Isometry3d>& est,
                                              const TrajectoryEvalParams& params);
 
+// Consistency of an estimate that comes with pose covariances (seed 001: "absolute errors all
+// bounded by twice the estimated standard deviations"). Both trajectories are taken relative to
+// their first pose (the filter starts there with zero covariance). The error of pose i, in the
+// filter's error-state convention (left perturbation in the world frame, [rot rad, trans m]):
+//     e = [log(R_gt R_est^T), t_gt - t_est],   NEES_i = e^T P_i^-1 e  (6 dof).
+// Frames whose covariance is not positive definite (the first) are skipped.
+struct NeesResult {
+  int frames = 0;               // frames evaluated
+  double mean_nees = 0;         // expected 6 for a consistent filter
+  double mean_nees_position = 0;  // 3-dof NEES of the position alone (expected 3)
+  double within_2sigma_pct = 0;   // frames where every one of the 6 |e_k| <= 2 sigma_k
+  double position_within_2sigma_pct = 0;  // frames where the 3 position |e_k| <= 2 sigma_k
+  std::vector<double> nees;       // per evaluated frame
+};
+Result<NeesResult> evaluateNees(const std::vector<Eigen::Isometry3d>& gt,
+                                const std::vector<Eigen::Isometry3d>& est,
+                                const std::vector<Eigen::Matrix<double, 6, 6>>& cov);
+
 }  // namespace svslam

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
 #include <cmath>
 #include <random>
 
@@ -103,3 +104,49 @@ TEST(TrajectoryMetrics, RejectsBadInput) {
 
 }  // namespace
 }  // namespace svslam
+
+// NEES against covariances the errors were drawn from: about 6 on average, and ~95 % of frames
+// within 2 sigma per position axis (0.954^3 ~ 87 % for all three at once).
+TEST(Nees, MatchesTheSamplingCovariance) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  std::vector<Eigen::Isometry3d> gt, est;
+  std::vector<Eigen::Matrix<double, 6, 6>> cov;
+  for (int i = 0; i < 4000; ++i) {
+    Eigen::Isometry3d G = Eigen::Isometry3d::Identity();
+    G.translate(Eigen::Vector3d(0.1 * i, 0.02 * i, 0));
+    G.rotate(Eigen::AngleAxisd(0.01 * i, Eigen::Vector3d::UnitZ()));
+    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Random() * 0.1;
+    Eigen::Matrix<double, 6, 6> P = A * A.transpose() + 1e-3 * Eigen::Matrix<double, 6, 6>::Identity();
+    if (i == 0) P.setZero();  // the first frame has no uncertainty and is skipped
+    Eigen::Matrix<double, 6, 1> e = Eigen::Matrix<double, 6, 1>::Zero();
+    if (i > 0) {
+      Eigen::Matrix<double, 6, 1> w;
+      for (int k = 0; k < 6; ++k) w(k) = n01(rng);
+      e = Eigen::LLT<Eigen::Matrix<double, 6, 6>>(P).matrixL() * w;
+    }
+    // e = [log(R_gt R_est^T), t_gt - t_est]  ->  R_est = exp(-e_rot) R_gt, t_est = t_gt - e_t.
+    Eigen::Isometry3d E = Eigen::Isometry3d::Identity();
+    const Eigen::Vector3d r = e.head<3>();
+    E.linear() = (r.norm() > 0 ? Eigen::AngleAxisd(-r.norm(), r.normalized()).toRotationMatrix()
+                               : Eigen::Matrix3d::Identity()) *
+                 G.linear();
+    E.translation() = G.translation() - e.tail<3>();
+    gt.push_back(G);
+    est.push_back(E);
+    cov.push_back(P);
+  }
+  auto r = svslam::evaluateNees(gt, est, cov);
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->frames, 3999);
+  EXPECT_NEAR(r->mean_nees, 6.0, 0.3);
+  EXPECT_NEAR(r->mean_nees_position, 3.0, 0.2);
+  EXPECT_NEAR(r->position_within_2sigma_pct, 100 * std::pow(0.9545, 3), 2.5);
+  // Twice the errors: NEES four times larger.
+  for (std::size_t i = 1; i < est.size(); ++i) cov[i] /= 4.0;
+  auto r4 = svslam::evaluateNees(gt, est, cov);
+  ASSERT_TRUE(r4.isOk());
+  EXPECT_NEAR(r4->mean_nees, 24.0, 1.5);
+  cov.pop_back();
+  EXPECT_FALSE(svslam::evaluateNees(gt, est, cov).isOk());
+}
