@@ -147,6 +147,17 @@ static Status parse(ConfigReader& r, RunConfig& out) {
   SVSLAM_TRY(readTemporal(r, o.temporal_match));
   SVSLAM_TRY(readMotion(r, o.motion));
   SVSLAM_TRY(readDense(r, o));
+  SVSLAM_TRY(r.read("odometry.roi_tracking", o.roi_tracking));
+  SVSLAM_TRY(r.read("odometry.unknown_threshold_factor", o.unknown_threshold_factor, 0.001, 1));
+  SVSLAM_TRY(r.read("clusters.stop_distance_m", o.clusters.stop_distance_m, 1e-6, 1e6));
+  SVSLAM_TRY(r.read("clusters.min_cluster_size", o.clusters.min_cluster_size, 1, 100000));
+  SVSLAM_TRY(r.read("clusters.max_points", o.clusters.max_points, 1, 4096));
+  SVSLAM_TRY(r.read("clusters.roi_margin_px", o.clusters.roi_margin_px, 0, 1000));
+  std::string rr = o.clusters.roi_radius == RoiRadius::kSphereBound ? "sphere-bound" : "farthest-point";
+  SVSLAM_TRY(r.read("clusters.roi_radius", rr, {"sphere-bound", "farthest-point"}));
+  o.clusters.roi_radius = rr == "sphere-bound" ? RoiRadius::kSphereBound : RoiRadius::kFarthestPoint;
+  SVSLAM_TRY(r.read("clusters.min_depth_m", o.clusters.min_depth_m, 1e-6, 1e6));
+  SVSLAM_TRY(r.read("clusters.unknown_cell_px", o.clusters.unknown_cell_px, 4, 1024));
   SVSLAM_TRY(r.read("odometry.match_sigma_px", o.match_sigma_px, 0.01, 10));
   SVSLAM_TRY(r.read("odometry.min_disparity_px", o.min_disparity_px, 0.01, 1024));
   SVSLAM_TRY(r.read("odometry.max_depth_m", o.max_depth_m, 0.01, 1e9));

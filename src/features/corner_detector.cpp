@@ -124,6 +124,7 @@ Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<
       max_r = std::max(max_r, rr[x]);
     }
   }
+  max_response_ = max_r;
   if (!(max_r > 0)) return Status::ok();  // flat image: no corner
   const float thr = static_cast<float>(params_.threshold_rel) * max_r;
   // Local maxima, bucketed by cell.

@@ -43,11 +43,14 @@ class CornerDetector {
   const Status& initStatus() const { return init_status_; }
   // Corners of `image` (width x height), strongest first within each cell, cells row-major.
   Status process(ImageView<const std::uint8_t> image, std::vector<Corner>& out);
+  // Largest response of the last processed image (0 for a flat one).
+  float lastMaxResponse() const { return max_response_; }
 
  private:
   CornerParams params_;
   Status init_status_;
   int width_, height_;
+  float max_response_ = 0;
   std::vector<float> kd_, kg_, ki_;  // derivative, smoothing and integration kernels
   ImageF32 tmp_, ix_, iy_, ixx_, iyy_, ixy_, resp_;
   std::vector<float> row_;  // padded row of the horizontal convolution

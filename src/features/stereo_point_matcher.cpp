@@ -93,7 +93,8 @@ Status StereoPointMatcher::process(ImageView<const std::uint8_t> left,
                                    ImageView<const std::uint8_t> right,
                                    const std::vector<Eigen::Vector2f>& pts_px,
                                    ImageView<const float> prior_disp_px,
-                                   std::vector<StereoMatch>& out, StereoMatchStats& stats) {
+                                   std::vector<StereoMatch>& out, StereoMatchStats& stats,
+                                   const std::vector<Eigen::Vector2i>* ranges) {
   out.clear();
   stats = {};
   if (!init_status_) return init_status_;
@@ -102,6 +103,8 @@ Status StereoPointMatcher::process(ImageView<const std::uint8_t> left,
   const bool has_prior = !prior_disp_px.empty();
   if (has_prior && (prior_disp_px.width != left.width || prior_disp_px.height != left.height))
     return Status::invalidArgument("stereo matcher: disparity prior size differs from the image");
+  if (ranges && ranges->size() != pts_px.size())
+    return Status::invalidArgument("stereo matcher: one disparity range per point expected");
   const int h = params_.patch_half_px;
   for (std::size_t i = 0; i < pts_px.size(); ++i) {
     const int x = static_cast<int>(std::lround(pts_px[i].x()));
@@ -109,6 +112,11 @@ Status StereoPointMatcher::process(ImageView<const std::uint8_t> left,
     if (!patchInside(left, x, y, h)) continue;
     ++stats.candidates;
     int d0 = params_.min_disp_px, d1 = params_.max_disp_px - 1;
+    if (ranges) {
+      d0 = std::max(d0, (*ranges)[i].x());
+      d1 = std::min(d1, (*ranges)[i].y());
+      if (d0 > d1) continue;
+    }
     if (has_prior) {
       const float p = prior_disp_px(x, y);
       if (std::isfinite(p)) {

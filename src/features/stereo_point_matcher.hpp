@@ -68,9 +68,13 @@ class StereoPointMatcher {
 
   // Matches the points `pts_px` of `left` in `right` (same size). `prior_disp_px` is a dense
   // disparity of the left image (+inf or NaN where unknown) or an empty view.
+  // `ranges`, when given, holds one integer disparity interval [d0, d1] per point (e.g. from a
+  // right-image region of interest), intersected with the parameter range; d0 > d1 skips the
+  // point.
   Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                  const std::vector<Eigen::Vector2f>& pts_px, ImageView<const float> prior_disp_px,
-                 std::vector<StereoMatch>& out, StereoMatchStats& stats);
+                 std::vector<StereoMatch>& out, StereoMatchStats& stats,
+                 const std::vector<Eigen::Vector2i>* ranges = nullptr);
 
   // Row search for one left pixel (x, y) over disparities [d0, d1] (clipped to the parameter
   // range), with the same acceptance tests as process(); false when not matched.

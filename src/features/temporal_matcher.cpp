@@ -54,12 +54,15 @@ Status TemporalMatcher::process(ImageView<const std::uint8_t> prev_img,
                                 const std::vector<TrackPoint>& cur,
                                 const Eigen::Isometry3d& T_cur_prev_pred,
                                 const PinholeCamera& camera, std::vector<TemporalMatch>& out,
-                                TemporalMatchStats& stats, float search_radius_px) {
+                                TemporalMatchStats& stats, float search_radius_px,
+                                const std::vector<Eigen::Vector4i>* regions) {
   out.clear();
   stats = {};
   if (!init_status_) return init_status_;
   if (prev_img.width != cur_img.width || prev_img.height != cur_img.height)
     return Status::invalidArgument("temporal matcher: images differ in size");
+  if (regions && regions->size() != prev.size())
+    return Status::invalidArgument("temporal matcher: one region per previous point expected");
   const float radius = search_radius_px > 0.0f ? search_radius_px : params_.search_radius_px;
   const int h = params_.patch_half_px;
   buildGrid(cur, cur_img.width, cur_img.height, std::max(8.0f, radius));
@@ -94,6 +97,12 @@ Status TemporalMatcher::process(ImageView<const std::uint8_t> prev_img,
           const TrackPoint& cj = cur[static_cast<std::size_t>(j)];
           const float du = cj.u_px - static_cast<float>(u), dv = cj.v_px - static_cast<float>(v);
           if (du * du + dv * dv > r2) continue;
+          if (regions) {
+            const Eigen::Vector4i& g = (*regions)[i];
+            if (g[0] < g[2] && (cj.u_px < g[0] || cj.u_px >= g[2] || cj.v_px < g[1] ||
+                                cj.v_px >= g[3]))
+              continue;
+          }
           const int qx = static_cast<int>(std::lround(cj.u_px));
           const int qy = static_cast<int>(std::lround(cj.v_px));
           if (!patchInside(cur_img, qx, qy, h)) continue;

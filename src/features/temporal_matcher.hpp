@@ -63,11 +63,14 @@ class TemporalMatcher {
 
   // `out` is sorted by previous index. `search_radius_px` > 0 overrides the parameter (used
   // after a tracking loss).
+  // `regions`, when given, holds one rectangle [x0, x1) x [y0, y1) per previous point (its
+  // cluster's region of interest in the current image; x0 >= x1 = no restriction): candidates
+  // outside it are not considered.
   Status process(ImageView<const std::uint8_t> prev_img, const std::vector<TrackPoint>& prev,
                  ImageView<const std::uint8_t> cur_img, const std::vector<TrackPoint>& cur,
                  const Eigen::Isometry3d& T_cur_prev_pred, const PinholeCamera& camera,
                  std::vector<TemporalMatch>& out, TemporalMatchStats& stats,
-                 float search_radius_px = 0.0f);
+                 float search_radius_px = 0.0f, const std::vector<Eigen::Vector4i>* regions = nullptr);
 
  private:
   void buildGrid(const std::vector<TrackPoint>& cur, int width, int height, float cell);

@@ -9,10 +9,18 @@
 
 namespace svslam {
 
+namespace {
+CornerParams detectorParams(const StereoOdometryParams& p) {
+  CornerParams c = p.corners;
+  if (p.roi_tracking) c.threshold_rel *= p.unknown_threshold_factor;  // see applyRois()
+  return c;
+}
+}  // namespace
+
 StereoOdometry::StereoOdometry(const StereoOdometryParams& params, const StereoCalibration& calib)
     : params_(params),
       calib_(calib),
-      detector_(params.corners, std::max(calib.width, 1), std::max(calib.height, 1)),
+      detector_(detectorParams(params), std::max(calib.width, 1), std::max(calib.height, 1)),
       stereo_matcher_(params.stereo_match),
       temporal_matcher_(params.temporal_match),
       motion_(params.motion) {
@@ -22,6 +30,10 @@ StereoOdometry::StereoOdometry(const StereoOdometryParams& params, const StereoC
   if (init_status_ && params.detector == PointDetector::kOrb) {
     orb_ = std::make_unique<OrbExtractor>(params.orb, calib.width, calib.height);
     init_status_ = orb_->initStatus();
+  }
+  if (init_status_ && params.roi_tracking) {
+    clusterer_ = std::make_unique<FeatureClusters>(params.clusters);
+    init_status_ = clusterer_->initStatus();
   }
   if (init_status_ && params.dense) {
     dense_ = std::make_unique<DenseStereo>(params.dense_stereo, calib.width, calib.height);
@@ -45,6 +57,9 @@ StereoOdometry::~StereoOdometry() = default;
 void StereoOdometry::resetTracking() {
   has_prev_ = false;
   completed_ = false;
+  have_rois_ = false;
+  prev_clusters_.clear();
+  cur_clusters_.clear();
   last_motion_ = Eigen::Isometry3d::Identity();
 }
 
@@ -72,6 +87,55 @@ void StereoOdometry::buildPoints(ImageView<const std::uint8_t> left) {
     tp.d_px = m.d_px;
     tp.sigma_d_px = m.sigma_d_px;
     cur_.push_back(tp);
+  }
+}
+
+void StereoOdometry::applyRois(OdometryFrameResult& out) {
+  if (!clusterer_->project(prev_clusters_, last_motion_, calib_, roi_)) return;
+  if (roi_.rois.empty()) return;
+  have_rois_ = true;
+  out.rois = static_cast<int>(roi_.rois.size());
+  const float thr_roi = static_cast<float>(params_.corners.threshold_rel) *
+                        (orb_ ? 0.0f : detector_.lastMaxResponse());
+  // Keep: corners inside a left ROI that reach the normal threshold (disparity bounded by the
+  // union of the right ROIs of the ROIs holding it), and corners of unknown cells (full range).
+  std::size_t w = 0;
+  ranges_.clear();
+  for (std::size_t i = 0; i < corner_px_.size(); ++i) {
+    const Eigen::Vector2f p = corner_px_[i];
+    int d0 = 1 << 30, d1 = -(1 << 30);
+    bool in_roi = false;
+    for (const ClusterRoi& r : roi_.rois) {
+      if (!r.left.contains(p.x(), p.y())) continue;
+      in_roi = true;
+      if (r.right.empty()) continue;
+      // Right patch centre x - d inside [right.x0, right.x1).
+      d0 = std::min(d0, static_cast<int>(std::floor(p.x())) - r.right.x1 + 1);
+      d1 = std::max(d1, static_cast<int>(std::ceil(p.x())) - r.right.x0);
+    }
+    const bool unknown = roi_.isUnknown(p.x(), p.y());
+    if (in_roi && corner_resp_[i] >= thr_roi) {
+      // A point of an unknown cell can also sit in a ROI corner region: full range then.
+      ranges_.emplace_back(unknown ? 0 : d0 - 1, unknown ? (1 << 30) : d1 + 1);
+    } else if (unknown) {
+      ranges_.emplace_back(0, 1 << 30);
+      ++out.unknown_corners;
+    } else {
+      ++out.roi_dropped;
+      continue;
+    }
+    corner_px_[w] = p;
+    corner_resp_[w] = corner_resp_[i];
+    ++w;
+  }
+  corner_px_.resize(w);
+  corner_resp_.resize(w);
+  // Temporal matching: each previous point is searched inside its cluster's left ROI.
+  regions_.assign(prev_.size(), Eigen::Vector4i(0, 0, 0, 0));  // no restriction
+  for (const ClusterRoi& r : roi_.rois) {
+    if (r.whole_image) continue;
+    for (const int m : prev_clusters_[static_cast<std::size_t>(r.cluster)].members)
+      regions_[static_cast<std::size_t>(m)] = Eigen::Vector4i(r.left.x0, r.left.y0, r.left.x1, r.left.y1);
   }
 }
 
@@ -108,6 +172,7 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
   if (completed_) {  // the last frame becomes the previous one
     prev_.swap(cur_);
     std::swap(prev_left_, cur_left_);
+    prev_clusters_.swap(cur_clusters_);
     has_prev_ = true;
     completed_ = false;
   }
@@ -118,16 +183,26 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
     done("dense_stereo");
   }
   corner_px_.clear();
+  corner_resp_.clear();
   if (orb_) {
     if (Status s = orb_->process(left, orb_kp_, orb_desc_); !s) return s;
-    for (const OrbKeypoint& k : orb_kp_) corner_px_.emplace_back(k.x_px, k.y_px);
+    for (const OrbKeypoint& k : orb_kp_) {
+      corner_px_.emplace_back(k.x_px, k.y_px);
+      corner_resp_.push_back(k.score);
+    }
   } else {
     if (Status s = detector_.process(left, corners_); !s) return s;
-    for (const Corner& c : corners_) corner_px_.emplace_back(c.x_px, c.y_px);
+    for (const Corner& c : corners_) {
+      corner_px_.emplace_back(c.x_px, c.y_px);
+      corner_resp_.push_back(c.response);
+    }
   }
+  have_rois_ = false;
+  if (clusterer_ && has_prev_ && !prev_clusters_.empty()) applyRois(out);
   out.corners = static_cast<int>(corner_px_.size());
   done("detect");
-  if (Status s = stereo_matcher_.process(left, right, corner_px_, prior, stereo_, out.stereo_stats);
+  if (Status s = stereo_matcher_.process(left, right, corner_px_, prior, stereo_, out.stereo_stats,
+                                         have_rois_ ? &ranges_ : nullptr);
       !s)
     return s;
   buildPoints(left);
@@ -140,7 +215,8 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
   if (has_prev_) {
     const PinholeCamera cam = calib_.leftCamera();
     Status s = temporal_matcher_.process(prev_left_.cview(), prev_, left, cur_, last_motion_, cam,
-                                         matches_, out.temporal_stats);
+                                         matches_, out.temporal_stats, 0.0f,
+                                         have_rois_ ? &regions_ : nullptr);
     if (!s) return s;
     if (static_cast<int>(matches_.size()) < params_.min_matches) {
       out.retried = true;
@@ -150,6 +226,15 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
       if (!s) return s;
     }
     out.temporal_matches = static_cast<int>(matches_.size());
+  }
+  if (clusterer_) {  // clusters of this frame's points, for the next frame's ROIs
+    cluster_pts_.clear();
+    cluster_quality_.clear();
+    for (const TrackPoint& p : cur_) {
+      cluster_pts_.push_back(p.p_cam);
+      cluster_quality_.push_back(static_cast<float>(std::sqrt(p.cov.trace())));
+    }
+    if (Status s = clusterer_->process(cluster_pts_, cluster_quality_, cur_clusters_); !s) return s;
   }
   done("temporal_match");
   in_frame_ = true;

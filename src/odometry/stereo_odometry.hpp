@@ -29,6 +29,7 @@
 #include "core/stage_observer.hpp"
 #include "core/status.hpp"
 #include "features/corner_detector.hpp"
+#include "features/feature_clusters.hpp"
 #include "features/orb_extractor.hpp"
 #include "features/stereo_point_matcher.hpp"
 #include "features/temporal_matcher.hpp"
@@ -48,6 +49,15 @@ struct StereoOdometryParams {
   StereoMatchParams stereo_match;
   TemporalMatchParams temporal_match;
   VisualMotionParams motion;
+  // Clustered-feature ROI tracking (seed 004 sec 3.6): the previous frame's 3D points are
+  // clustered; the clusters, moved by the predicted motion, give left ROIs (where points are
+  // kept and temporally matched to their cluster's members only) and right ROIs (which bound the
+  // stereo disparity search); image cells outside every ROI are unknown and keep corners down
+  // to threshold_rel * unknown_threshold_factor (the detector runs at that lowered threshold,
+  // corners inside ROIs must still reach threshold_rel).
+  bool roi_tracking = false;
+  FeatureClusterParams clusters;
+  double unknown_threshold_factor = 0.25;  // (0, 1]
   bool dense = false;  // dense stereo for the prior and the 8-neighbour observation
   DenseStereoParams dense_stereo;
   double match_sigma_px = 0.5;  // matching error between consecutive frames, px (seed: 0.5)
@@ -70,6 +80,9 @@ struct OdometryFrameResult {
   int temporal_matches = 0;
   int inliers = 0;
   bool retried = false;
+  int rois = 0;             // ROI tracking: cluster regions used in this frame
+  int roi_dropped = 0;      // corners outside every ROI and not in an unknown cell
+  int unknown_corners = 0;  // corners kept in unknown cells
   StereoMatchStats stereo_stats;
   TemporalMatchStats temporal_stats;
 };
@@ -113,6 +126,8 @@ class StereoOdometry {
 
  private:
   void buildPoints(ImageView<const std::uint8_t> left);
+  // ROI tracking: filters corner_px_ and fills ranges_ / regions_ from the previous clusters.
+  void applyRois(OdometryFrameResult& out);
 
   StereoOdometryParams params_;
   StereoCalibration calib_;
@@ -128,6 +143,15 @@ class StereoOdometry {
   DisparityResult disparity_;
   std::vector<Corner> corners_;
   std::vector<Eigen::Vector2f> corner_px_;
+  std::vector<float> corner_resp_;
+  std::unique_ptr<FeatureClusters> clusterer_;
+  std::vector<Cluster> prev_clusters_, cur_clusters_;
+  RoiSet roi_;
+  std::vector<Eigen::Vector2i> ranges_;
+  std::vector<Eigen::Vector4i> regions_;
+  std::vector<Eigen::Vector3d> cluster_pts_;
+  std::vector<float> cluster_quality_;
+  bool have_rois_ = false;
   std::vector<StereoMatch> stereo_;
   std::vector<TrackPoint> prev_, cur_;
   std::vector<TemporalMatch> matches_;
