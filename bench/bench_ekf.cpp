@@ -1,0 +1,202 @@
+// EKF SLAM frame cost (seed 001 sec. 4, issue 4 target: <= 5 ms per frame with 300 landmarks):
+// one prediction + one update with 20, 30 or 40 stereo observations, 300 landmarks in the
+// state, svslam's sparse-H update (Joseph form, and the optimal-gain form) beside a naive dense
+// textbook EKF (full F, dense H, P = (I - K H) P (I - K H)^T + K R K^T) in the same binary.
+// Prints ms per frame and the ratio svslam / dense at the end. One thread.
+#include <benchmark/benchmark.h>
+
+#include <Eigen/Cholesky>
+#include <cstdio>
+#include <map>
+#include <random>
+#include <string>
+
+#include "motion/visual_motion.hpp"
+#include "slam/ekf_slam.hpp"
+#include "slam/pose_jacobians.hpp"
+
+namespace {
+
+using svslam::Matrix6d;
+using svslam::Vector6d;
+constexpr int kLandmarks = 300;
+
+// Stereo-like covariance (f = 700 px, b = 0.5 m, 0.5 px image plane, 0.3 px disparity):
+// lateral sigma z * 0.5 / f, depth sigma z^2 * 0.3 / (f b).
+Eigen::Matrix3d stereoCov(const Eigen::Vector3d& p) {
+  const double s_lat = p.z() * 0.5 / 700.0, s_z = p.z() * p.z() * 0.3 / 350.0;
+  return Eigen::Vector3d(s_lat * s_lat, s_lat * s_lat, s_z * s_z).asDiagonal();
+}
+
+Matrix6d motionCov() {
+  return (Vector6d() << 4e-6, 4e-6, 1e-6, 4e-4, 4e-4, 1e-4).finished().asDiagonal();
+}
+
+Eigen::Isometry3d motion() {
+  Eigen::Isometry3d u = Eigen::Isometry3d::Identity();
+  u.linear() = svslam::expSO3(Eigen::Vector3d(0.001, -0.002, 0.001));
+  u.translation() = Eigen::Vector3d(0.02, 0.0, -0.05);
+  return u;
+}
+
+// 300 landmarks spread in front of the camera, initialised with stereo covariances.
+std::vector<Eigen::Vector3d> scene() {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> x(-15, 15), y(-8, 8), z(5, 40);
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < kLandmarks; ++i) pts.emplace_back(x(rng), y(rng), z(rng));
+  return pts;
+}
+
+// Observations of n_obs landmarks (rotating through the state) at their predicted position
+// plus a small offset, so that gating keeps them.
+void observe(const svslam::EkfSlam& ekf, int n_obs, int frame,
+             std::vector<svslam::LandmarkObservation>& obs) {
+  obs.clear();
+  const auto& ids = ekf.landmarkIds();
+  for (int j = 0; j < n_obs; ++j) {
+    const int id = ids[static_cast<std::size_t>((frame * 7 + j * 11) % kLandmarks)];
+    Eigen::Vector3d m;
+    Eigen::Matrix3d C;
+    (void)ekf.landmark(id, m, C);
+    const Eigen::Vector3d z = svslam::observeLandmark(ekf.pose(), m);
+    obs.push_back({id, z + 1e-3 * Eigen::Vector3d(1, -1, 2), stereoCov(z)});
+  }
+}
+
+void runSvslam(benchmark::State& st, bool joseph) {
+  const int n_obs = static_cast<int>(st.range(0));
+  svslam::EkfSlamParams params;
+  params.joseph_form = joseph;
+  svslam::EkfSlam ekf(params);
+  (void)ekf.reset(Eigen::Isometry3d::Identity(), motionCov());
+  for (const auto& p : scene()) (void)ekf.addLandmark(p, stereoCov(p));
+  std::vector<svslam::LandmarkObservation> obs;
+  std::vector<svslam::ObservationResult> res;
+  int frame = 0, accepted = 0;
+  for (auto _ : st) {
+    st.PauseTiming();
+    observe(ekf, n_obs, frame++, obs);
+    st.ResumeTiming();
+    if (!ekf.predict(motion(), motionCov()) || !ekf.update(obs, res))
+      st.SkipWithError("EKF failed");
+    for (const auto& r : res) accepted += r.accepted ? 1 : 0;
+  }
+  st.counters["frames"] = benchmark::Counter(static_cast<double>(st.iterations()));
+  st.counters["accepted_per_frame"] =
+      static_cast<double>(accepted) / static_cast<double>(st.iterations());
+}
+
+void BM_Ekf_svslam_joseph(benchmark::State& st) { runSvslam(st, true); }
+void BM_Ekf_svslam_optimal_gain(benchmark::State& st) { runSvslam(st, false); }
+
+// Naive dense EKF on the same model: full n x n Jacobians and products everywhere.
+void BM_Ekf_dense_reference(benchmark::State& st) {
+  const int n_obs = static_cast<int>(st.range(0)), n = 6 + 3 * kLandmarks, m = 3 * n_obs;
+  svslam::EkfSlam init(svslam::EkfSlamParams{});  // same initial state as the svslam runs
+  (void)init.reset(Eigen::Isometry3d::Identity(), motionCov());
+  for (const auto& p : scene()) (void)init.addLandmark(p, stereoCov(p));
+  Eigen::Isometry3d T = init.pose();
+  Eigen::MatrixXd P = init.covariance();
+  Eigen::VectorXd lm(3 * kLandmarks);
+  for (int i = 0; i < kLandmarks; ++i) {
+    Eigen::Vector3d p;
+    Eigen::Matrix3d C;
+    (void)init.landmark(init.landmarkIds()[static_cast<std::size_t>(i)], p, C);
+    lm.segment<3>(3 * i) = p;
+  }
+  std::vector<svslam::LandmarkObservation> obs;
+  int frame = 0;
+  for (auto _ : st) {
+    st.PauseTiming();
+    observe(init, n_obs, frame++, obs);  // ids = slots of `init`, which never changes order
+    st.ResumeTiming();
+    Matrix6d F_x, F_u;
+    svslam::predictionJacobians(T, motion(), F_x, F_u);
+    Eigen::MatrixXd F = Eigen::MatrixXd::Identity(n, n), G = Eigen::MatrixXd::Zero(n, 6);
+    F.topLeftCorner<6, 6>() = F_x;
+    G.topRows<6>() = F_u;
+    P = F * P * F.transpose() + G * motionCov() * G.transpose();
+    T = svslam::predictPose(T, motion());
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, n), R = Eigen::MatrixXd::Zero(m, m);
+    Eigen::VectorXd nu(m);
+    for (int j = 0; j < n_obs; ++j) {
+      const int s = obs[static_cast<std::size_t>(j)].id;  // ids 0..299 = slots in `init`
+      svslam::Matrix36d H_p;
+      Eigen::Matrix3d H_m;
+      svslam::observationJacobians(T, lm.segment<3>(3 * s), H_p, H_m);
+      H.block<3, 6>(3 * j, 0) = H_p;
+      H.block<3, 3>(3 * j, 6 + 3 * s) = H_m;
+      R.block<3, 3>(3 * j, 3 * j) = obs[static_cast<std::size_t>(j)].R;
+      nu.segment<3>(3 * j) = 1e-3 * Eigen::Vector3d(1, -1, 2);
+    }
+    const Eigen::MatrixXd S = H * P * H.transpose() + R;
+    const Eigen::MatrixXd K = P * H.transpose() * S.llt().solve(Eigen::MatrixXd::Identity(m, m));
+    const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(n, n) - K * H;
+    P = IKH * P * IKH.transpose() + K * R * K.transpose();
+    const Eigen::VectorXd dx = K * nu;
+    T = svslam::boxPlus(T, dx.head<6>());
+    lm += dx.tail(n - 6);
+    benchmark::DoNotOptimize(P.data());
+  }
+  st.counters["frames"] = benchmark::Counter(static_cast<double>(st.iterations()));
+}
+
+BENCHMARK(BM_Ekf_svslam_joseph)
+    ->Arg(20)
+    ->Arg(30)
+    ->Arg(40)
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(1.0);
+BENCHMARK(BM_Ekf_svslam_optimal_gain)
+    ->Arg(20)
+    ->Arg(30)
+    ->Arg(40)
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(1.0);
+BENCHMARK(BM_Ekf_dense_reference)->Arg(30)->Unit(benchmark::kMillisecond)->Iterations(5);
+
+// Prints ms per frame and the ratios svslam / dense reference at the end.
+class FrameReporter : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const Run& r : runs) {
+      if (r.run_type != Run::RT_Iteration || r.error_occurred) continue;
+      const auto it = r.counters.find("frames");
+      if (it == r.counters.end() || it->second.value <= 0) continue;
+      per_frame_ms_[r.benchmark_name()] = r.GetAdjustedRealTime();  // unit: ms per iteration
+    }
+    ConsoleReporter::ReportRuns(runs);
+  }
+  void Finalize() override {
+    ConsoleReporter::Finalize();
+    std::printf("\nPer frame (predict + update, %d landmarks in the state, 1 thread):\n",
+                kLandmarks);
+    for (const auto& [name, ms] : per_frame_ms_)
+      std::printf("  %-52s %8.2f ms\n", name.c_str(), ms);
+    double dense = 0;
+    for (const auto& [name, ms] : per_frame_ms_)
+      if (name.find("dense_reference/30") != std::string::npos) dense = ms;
+    for (const auto& [name, ms] : per_frame_ms_) {
+      if (name.find("svslam") == std::string::npos || name.find("/30") == std::string::npos)
+        continue;
+      std::printf("  %s: target <= 5 ms per frame -> %s", name.c_str(),
+                  ms <= 5 ? "met" : "NOT met");
+      if (dense > 0) std::printf("; ratio svslam / dense reference: %.4f", ms / dense);
+      std::printf("\n");
+    }
+  }
+
+ private:
+  std::map<std::string, double> per_frame_ms_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  FrameReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,314 @@
+#include "slam/ekf_slam.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "motion/visual_motion.hpp"
+
+namespace svslam {
+namespace {
+
+using Eigen::Lower;
+
+// A symmetric (relative tolerance 1e-9) positive semi-definite (or definite when `definite`)
+// finite matrix; returns a message naming `what` otherwise.
+template <int N>
+Status checkCovariance(const Eigen::Matrix<double, N, N>& C, bool definite,
+                       const std::string& what) {
+  if (!C.allFinite()) return Status::invalidArgument(what + " has non-finite entries");
+  const double scale = C.cwiseAbs().maxCoeff();
+  if ((C - C.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale)
+    return Status::invalidArgument(what + " is not symmetric");
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(C, Eigen::EigenvaluesOnly);
+  const double min_eig = es.eigenvalues()(0);
+  if (definite ? !(min_eig > 0) : min_eig < -1e-12 * scale)
+    return Status::invalidArgument(
+        what + (definite ? " is not positive definite" : " is not positive semi-definite"));
+  return Status::ok();
+}
+
+Status checkRigid(const Eigen::Isometry3d& T, const std::string& what) {
+  if (!T.matrix().allFinite()) return Status::invalidArgument(what + " has non-finite entries");
+  const Eigen::Matrix3d& R = T.linear();
+  if ((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 ||
+      R.determinant() < 0)
+    return Status::invalidArgument(what + " rotation is not a rotation matrix");
+  return Status::ok();
+}
+
+// Re-orthonormalises a rotation that accumulated round-off.
+Eigen::Matrix3d orthonormalised(const Eigen::Matrix3d& R) {
+  return Eigen::Quaterniond(R).normalized().toRotationMatrix();
+}
+
+}  // namespace
+
+Status EkfSlamParams::validate() const {
+  if (max_landmarks < 1 || max_landmarks > 3000)
+    return Status::invalidArgument("max_landmarks must be in [1, 3000]");
+  if (max_batch_observations < 1 || max_batch_observations > 1000)
+    return Status::invalidArgument("max_batch_observations must be in [1, 1000]");
+  if (!(gate_chi2 > 0) || !std::isfinite(gate_chi2))
+    return Status::invalidArgument("gate_chi2 must be finite and > 0");
+  return Status::ok();
+}
+
+EkfSlam::EkfSlam(const EkfSlamParams& params) : params_(params) {
+  init_status_ = params_.validate();
+  if (!init_status_) return;
+  const int cap = 6 + 3 * params_.max_landmarks;
+  const int mcap = 3 * params_.max_batch_observations;
+  m_world_.setZero(3, params_.max_landmarks);
+  P_.setZero(cap, cap);
+  P_pose_.setZero(cap, 6);
+  P_lm_.setZero(cap, 3);
+  A_.setZero(cap, 2 * mcap);
+  B_.setZero(cap, 2 * mcap);
+  S_.setZero(mcap, mcap);
+  L_.setZero(mcap, mcap);
+  W_.setZero(mcap, cap);
+  nu_.setZero(mcap);
+  dx_.setZero(cap);
+  ids_.reserve(static_cast<std::size_t>(params_.max_landmarks));
+  accepted_.reserve(static_cast<std::size_t>(params_.max_batch_observations));
+}
+
+Status EkfSlam::reset(const Eigen::Isometry3d& T_world_cam, const Matrix6d& P0) {
+  if (!init_status_) return init_status_;
+  if (Status s = checkRigid(T_world_cam, "reset: T_world_cam"); !s) return s;
+  if (Status s = checkCovariance<6>(P0, false, "reset: P0"); !s) return s;
+  T_world_cam_ = Eigen::Isometry3d::Identity();
+  T_world_cam_.linear() = orthonormalised(T_world_cam.linear());
+  T_world_cam_.translation() = T_world_cam.translation();
+  for (int id : ids_) slot_of_id_[static_cast<std::size_t>(id)] = -1;
+  ids_.clear();
+  P_.topLeftCorner<6, 6>() = 0.5 * (P0 + P0.transpose());
+  return Status::ok();
+}
+
+int EkfSlam::slotOf(int id) const {
+  if (id < 0 || id >= static_cast<int>(slot_of_id_.size())) return -1;
+  return slot_of_id_[static_cast<std::size_t>(id)];
+}
+
+void EkfSlam::gatherColumns(int c0, int k, Eigen::MatrixXd& out) const {
+  const int n = stateDim();
+  out.topRows(c0) = P_.block(c0, 0, k, c0).transpose();
+  out.block(c0, 0, k, k) = P_.block(c0, c0, k, k).selfadjointView<Lower>();
+  out.middleRows(c0 + k, n - c0 - k) = P_.block(c0 + k, c0, n - c0 - k, k);
+}
+
+Matrix6d EkfSlam::poseCovariance() const {
+  return P_.topLeftCorner<6, 6>().selfadjointView<Lower>();
+}
+
+Eigen::MatrixXd EkfSlam::covariance() const {
+  const int n = stateDim();
+  return P_.topLeftCorner(n, n).selfadjointView<Lower>();
+}
+
+Status EkfSlam::landmark(int id, Eigen::Vector3d& m_world, Eigen::Matrix3d& cov) const {
+  const int s = slotOf(id);
+  if (s < 0) return Status::notFound("landmark " + std::to_string(id) + " is not in the state");
+  const int o = 6 + 3 * s;
+  m_world = m_world_.col(s);
+  cov = P_.block<3, 3>(o, o).selfadjointView<Lower>();
+  return Status::ok();
+}
+
+Status EkfSlam::predict(const Eigen::Isometry3d& T_cur_prev, const Matrix6d& R_u) {
+  if (!init_status_) return init_status_;
+  if (Status s = checkRigid(T_cur_prev, "predict: T_cur_prev"); !s) return s;
+  if (Status s = checkCovariance<6>(R_u, false, "predict: R_u"); !s) return s;
+  Matrix6d F_x, F_u;
+  predictionJacobians(T_world_cam_, T_cur_prev, F_x, F_u);
+  const int n = stateDim();
+  const Matrix6d P_pp = poseCovariance();
+  P_.topLeftCorner<6, 6>() = F_x * P_pp * F_x.transpose() + F_u * R_u * F_u.transpose();
+  // Stored lower part of the cross block: P_mp = P_pm^T <- P_mp F_x^T.
+  auto P_mp = P_.block(6, 0, n - 6, 6);
+  P_pose_.topRows(n - 6).noalias() = P_mp * F_x.transpose();
+  P_mp = P_pose_.topRows(n - 6);
+  const Eigen::Isometry3d T = predictPose(T_world_cam_, T_cur_prev);
+  T_world_cam_.linear() = orthonormalised(T.linear());
+  T_world_cam_.translation() = T.translation();
+  return Status::ok();
+}
+
+Status EkfSlam::checkObservations(const std::vector<LandmarkObservation>& obs) const {
+  for (std::size_t k = 0; k < obs.size(); ++k) {
+    const std::string what = "update: observation " + std::to_string(k);
+    if (slotOf(obs[k].id) < 0)
+      return Status::invalidArgument(what + ": unknown landmark id " + std::to_string(obs[k].id));
+    if (!obs[k].z_cam.allFinite()) return Status::invalidArgument(what + ": z_cam is not finite");
+    if (Status s = checkCovariance<3>(obs[k].R, true, what + ": R"); !s) return s;
+  }
+  return Status::ok();
+}
+
+Status EkfSlam::update(const std::vector<LandmarkObservation>& obs,
+                       std::vector<ObservationResult>& results) {
+  if (!init_status_) return init_status_;
+  if (Status s = checkObservations(obs); !s) return s;
+  results.resize(obs.size());
+  // Gating of every observation against the state before any update:
+  // S_i = H_p P_pp H_p^T + H_p P_pm H_m^T + H_m P_mp H_p^T + H_m P_mm H_m^T + R_i.
+  const Matrix6d P_pp = poseCovariance();
+  std::size_t n_accepted = 0;
+  for (std::size_t k = 0; k < obs.size(); ++k) {
+    const int s = slotOf(obs[k].id), o = 6 + 3 * s;
+    Matrix36d H_p;
+    Eigen::Matrix3d H_m;
+    observationJacobians(T_world_cam_, m_world_.col(s), H_p, H_m);
+    const Eigen::Matrix<double, 3, 6> P_mp = P_.block<3, 6>(o, 0);
+    const Eigen::Matrix3d P_mm = P_.block<3, 3>(o, o).selfadjointView<Lower>();
+    const Eigen::Matrix3d HPH_cross = H_m * P_mp * H_p.transpose();
+    Eigen::Matrix3d S = H_p * P_pp * H_p.transpose() + HPH_cross + HPH_cross.transpose() +
+                        H_m * P_mm * H_m.transpose() + obs[k].R;
+    S = 0.5 * (S + S.transpose()).eval();
+    const Eigen::Vector3d nu = obs[k].z_cam - observeLandmark(T_world_cam_, m_world_.col(s));
+    const Eigen::LLT<Eigen::Matrix3d> llt(S);
+    double d2 = std::numeric_limits<double>::infinity();
+    if (llt.info() == Eigen::Success) d2 = nu.dot(llt.solve(nu));
+    results[k] = {obs[k].id, d2 <= params_.gate_chi2, d2};
+    n_accepted += results[k].accepted ? 1 : 0;
+  }
+  // Accepted observations, stacked in batches.
+  const std::size_t batch = static_cast<std::size_t>(params_.max_batch_observations);
+  std::size_t k = 0;
+  while (n_accepted > 0 && k < obs.size()) {
+    accepted_.clear();
+    for (; k < obs.size() && accepted_.size() < batch; ++k)
+      if (results[k].accepted) accepted_.push_back(static_cast<int>(k));
+    if (accepted_.empty()) break;
+    if (Status s = applyBatch(obs, accepted_.data(), static_cast<int>(accepted_.size())); !s)
+      return s;
+  }
+  return Status::ok();
+}
+
+Status EkfSlam::applyBatch(const std::vector<LandmarkObservation>& obs, const int* idx, int count) {
+  const int n = stateDim(), m = 3 * count;
+  auto M = B_.block(0, 0, n, m);
+  auto nu = nu_.head(m);
+  gatherColumns(0, 6, P_pose_);
+  const auto P_pose = P_pose_.topRows(n);
+  Matrix36d H_p;
+  Eigen::Matrix3d H_m;
+  // M = P H^T, one 3-column block per observation: P[:, pose] H_p^T + P[:, m_i] H_m^T.
+  for (int j = 0; j < count; ++j) {
+    const LandmarkObservation& o = obs[static_cast<std::size_t>(idx[j])];
+    const int s = slotOf(o.id);
+    observationJacobians(T_world_cam_, m_world_.col(s), H_p, H_m);
+    gatherColumns(6 + 3 * s, 3, P_lm_);
+    M.middleCols(3 * j, 3).noalias() = P_pose * H_p.transpose();
+    M.middleCols(3 * j, 3).noalias() += P_lm_.topRows(n) * H_m.transpose();
+    nu.segment<3>(3 * j) = o.z_cam - observeLandmark(T_world_cam_, m_world_.col(s));
+  }
+  // S = H M + R (block row i: H_p M[pose rows] + H_m M[rows of m_i]), then symmetrised.
+  auto S = S_.topLeftCorner(m, m);
+  for (int i = 0; i < count; ++i) {
+    const LandmarkObservation& o = obs[static_cast<std::size_t>(idx[i])];
+    const int s = slotOf(o.id);
+    observationJacobians(T_world_cam_, m_world_.col(s), H_p, H_m);
+    S.middleRows(3 * i, 3).noalias() = H_p * M.topRows(6);
+    S.middleRows(3 * i, 3).noalias() += H_m * M.middleRows(6 + 3 * s, 3);
+    S.block<3, 3>(3 * i, 3 * i) += o.R;
+  }
+  for (int c = 0; c < m; ++c)
+    for (int r = c + 1; r < m; ++r) S(r, c) = S(c, r) = 0.5 * (S(r, c) + S(c, r));
+  auto L = L_.topLeftCorner(m, m);
+  L = S;
+  Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(L);
+  if (llt.info() != Eigen::Success)
+    return Status(StatusCode::kInternal, "update: innovation covariance not positive definite");
+  // W = L^-1 M^T (the optimal-gain factor B^T); Joseph: W <- L^-T W = S^-1 M^T = K^T.
+  auto W = W_.topLeftCorner(m, n);
+  W = M.transpose();
+  llt.matrixL().solveInPlace(W);
+  auto dx = dx_.head(n);
+  if (params_.joseph_form) {
+    llt.matrixU().solveInPlace(W);
+    dx.noalias() = W.transpose() * nu;  // K nu
+  } else {
+    llt.matrixL().solveInPlace(nu);  // L^-1 nu, so B L^-1 nu = M S^-1 nu = K nu
+    dx.noalias() = W.transpose() * nu;
+  }
+  if (!dx.allFinite() || !W.allFinite())
+    return Status(StatusCode::kInternal, "update: non-finite gain");
+  auto P = P_.topLeftCorner(n, n);
+  if (params_.joseph_form) {
+    // Lower triangle of P - [K D][M K]^T, D = M - K S.
+    auto K = A_.block(0, 0, n, m);
+    K = W.transpose();
+    B_.block(0, m, n, m) = K;
+    auto D = A_.block(0, m, n, m);
+    D = M;
+    D.noalias() -= K * S;
+    P.triangularView<Lower>() -=
+        A_.topLeftCorner(n, 2 * m) * B_.topLeftCorner(n, 2 * m).transpose();
+  } else {
+    P.selfadjointView<Lower>().rankUpdate(W.transpose(), -1.0);  // P - B B^T
+  }
+  inject(n);
+  return Status::ok();
+}
+
+void EkfSlam::inject(int n) {
+  const auto dx = dx_.head(n);
+  T_world_cam_.linear() = orthonormalised(expSO3(dx.head<3>()) * T_world_cam_.linear());
+  T_world_cam_.translation() += dx.segment<3>(3);
+  for (int s = 0; s < numLandmarks(); ++s) m_world_.col(s) += dx.segment<3>(6 + 3 * s);
+}
+
+Result<int> EkfSlam::addLandmark(const Eigen::Vector3d& z_cam, const Eigen::Matrix3d& R_z) {
+  if (!init_status_) return init_status_;
+  if (!z_cam.allFinite()) return Status::invalidArgument("addLandmark: z_cam is not finite");
+  if (Status s = checkCovariance<3>(R_z, false, "addLandmark: R_z"); !s) return s;
+  if (numLandmarks() >= params_.max_landmarks)
+    return Status::failedPrecondition("addLandmark: the state holds max_landmarks = " +
+                                      std::to_string(params_.max_landmarks) + " landmarks");
+  Matrix36d G_x;
+  Eigen::Matrix3d G_z;
+  initJacobians(T_world_cam_, z_cam, G_x, G_z);
+  const int n = stateDim(), s = numLandmarks(), o = n;
+  gatherColumns(0, 6, P_pose_);
+  // P_m,x = G_x P[pose, :] (rows of the new landmark, all previous columns).
+  P_.block(o, 0, 3, n).noalias() = G_x * P_pose_.topRows(n).transpose();
+  const Matrix6d P_pp = P_pose_.topRows<6>();
+  P_.block<3, 3>(o, o) = G_x * P_pp * G_x.transpose() + G_z * R_z * G_z.transpose();
+  m_world_.col(s) = initLandmark(T_world_cam_, z_cam);
+  const int id = next_id_++;
+  ids_.push_back(id);
+  slot_of_id_.push_back(s);
+  return id;
+}
+
+Status EkfSlam::removeLandmark(int id, Eigen::Vector3d* m_world, Eigen::Matrix3d* cov) {
+  if (!init_status_) return init_status_;
+  const int s = slotOf(id);
+  if (s < 0)
+    return Status::notFound("removeLandmark: landmark " + std::to_string(id) +
+                            " is not in the state");
+  const int o = 6 + 3 * s, last = numLandmarks() - 1, ol = 6 + 3 * last;
+  if (m_world) *m_world = m_world_.col(s);
+  if (cov) *cov = P_.block<3, 3>(o, o).selfadjointView<Lower>();
+  if (s != last) {
+    // The last landmark moves to slot s: P(r, o..o+2) <- P(r, ol..ol+2) for every other r.
+    // Sources lie in rows ol.., targets in rows < ol, so nothing is overwritten before use.
+    P_.block(o, 0, 3, o) = P_.block(ol, 0, 3, o);
+    P_.block(o + 3, o, ol - o - 3, 3) = P_.block(ol, o + 3, 3, ol - o - 3).transpose();
+    P_.block<3, 3>(o, o) = P_.block<3, 3>(ol, ol);
+    m_world_.col(s) = m_world_.col(last);
+    ids_[static_cast<std::size_t>(s)] = ids_[static_cast<std::size_t>(last)];
+    slot_of_id_[static_cast<std::size_t>(ids_[static_cast<std::size_t>(s)])] = s;
+  }
+  ids_.pop_back();
+  slot_of_id_[static_cast<std::size_t>(id)] = -1;
+  return Status::ok();
+}
+
+}  // namespace svslam

@@ -1,0 +1,143 @@
+#pragma once
+// EKF SLAM core of seed 001 section 4: the stereo-bench pose and a set of 3D landmarks.
+//
+// State x = [x_p, m_1 .. m_N]. x_p = T_world_cam, the left camera in the world (camera x right,
+// y down, z forward; metres); m_i the world coordinates of landmark i (m). Landmarks carry stable
+// integer ids (never reused, independent of their place in the state vector).
+//
+// Attitude: an error state on SO(3) (slam/pose_jacobians.hpp). The true pose is the estimate
+// perturbed on the left, in the world frame: R_wc = exp([dtheta]x) R^_wc, t_wc = t^_wc + dt.
+// The covariance P, (6 + 3N) x (6 + 3N), is that of the error [dtheta (rad), dt (m), dm_1 (m),
+// ..., dm_N (m)]. After each update the error estimate is injected into the nominal state
+// (R <- exp([dtheta]x) R, t <- t + dt, m_i <- m_i + dm_i) and P is kept as it is: the reset
+// Jacobian of the injection is I + O(|dtheta|), dropped to first order (as the rest of the EKF).
+//
+// Prediction (seed eq. 1) from the VME result u = T_cur_prev with covariance R_u in the VME
+// convention (left perturbation, [dtheta_u, dt_u]): T_wc <- T_wc * T_cur_prev^-1,
+//     P_pp <- F_x P_pp F_x^T + F_u R_u F_u^T,   P_pm <- F_x P_pm,   P_mm unchanged
+// (landmarks stationary, no extra process noise; F_x, F_u in slam/pose_jacobians.hpp).
+//
+// Observation of landmark i (seed eqs. 2-3): z_i = R_wc^T (m_i - t_wc), its position in the
+// current camera frame measured by stereo with covariance R_i. Innovation nu = z - h(x),
+// H = [H_pose 0 .. H_m 0 ..] (3 x n, sparse), S = H P H^T + R_i. Every observation of a call is
+// gated on the Mahalanobis distance d^2 = nu^T S^-1 nu against gate_chi2, all against the state
+// before the call (before any update); gated ones are reported and not applied. The accepted
+// ones are stacked into one update (in batches of at most max_batch_observations, applied one
+// after the other, when there are more): with M = P H^T (n x m), K = M S^-1,
+//     x <- x (+) K nu,
+//     Joseph form: P <- (I - K H) P (I - K H)^T + K R K^T = P - K M^T - M K^T + K S K^T,
+// evaluated as P - [K D][M K]^T with D = M - K S (exact for any K; D is the round-off of the
+// gain solve), so the cost is O(n m) for M, O(n m^2) for K, O(n^2 m) for the one product and no
+// n x n identity or dense H is ever formed. With joseph_form = false the optimal-gain form
+// P - B B^T, B = M L^-T (S = L L^T), is used instead: a symmetric rank-m downdate, half the
+// flops of the Joseph product, but without its guarantee against a perturbed gain.
+// P is stored as its lower triangle only and every update computes the lower triangle of the
+// new (symmetric) matrix: the represented P is exactly symmetric by construction.
+//
+// Landmark initialisation (seed eqs. 4-5): m = g(x_p, z) = R_wc z + t_wc,
+//     P_mm = G_x P_pp G_x^T + G_z R_z G_z^T,   P_m,x = G_x [P_pp P_p,m_1 .. P_p,m_N].
+// Removal (retirement) deletes the landmark's rows and columns (the last landmark takes its
+// place in the state) and returns its final position and 3x3 covariance.
+//
+// Storage: P for max_landmarks is allocated in the constructor; predict, update (up to
+// max_batch_observations per batch), addLandmark and removeLandmark allocate nothing of their
+// own once `results` has reached its size (Eigen's matrix products still take their blocking
+// workspace from the heap for large operands).
+// Inputs are checked before anything changes: non-finite values, non-rotations, covariances
+// that are not symmetric positive (semi-)definite and unknown ids are rejected with a Status
+// naming the problem, and the filter is left untouched. A numerical failure inside an update
+// (innovation covariance not positive definite, non-finite gain) returns kInternal before the
+// failing batch touches the state (earlier batches of the same call stay applied).
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "core/status.hpp"
+#include "slam/pose_jacobians.hpp"
+
+namespace svslam {
+
+struct EkfSlamParams {
+  int max_landmarks = 300;          // landmarks in the state at once, [1, 3000]; P storage of
+                                    // (6 + 3 max)^2 doubles is preallocated (300: 6.5 MB)
+  int max_batch_observations = 64;  // observations stacked in one update, [1, 1000]; more
+                                    // accepted observations are applied in successive batches
+  double gate_chi2 = 11.34;         // Mahalanobis d^2 threshold, chi-square with 3 dof
+                                    // (11.34: 99 %, 7.81: 95 %, 16.27: 99.9 %), > 0
+  bool joseph_form = true;  // Joseph-form covariance update; false: optimal-gain form P - B B^T
+  Status validate() const;
+};
+
+struct LandmarkObservation {
+  int id = -1;            // landmark id returned by addLandmark
+  Eigen::Vector3d z_cam;  // measured position in the current left camera frame, m
+  Eigen::Matrix3d R;      // its covariance, m^2, symmetric positive definite
+};
+
+struct ObservationResult {
+  int id = -1;
+  bool accepted = false;      // false: gated out (d^2 > gate_chi2), not applied
+  double mahalanobis_d2 = 0;  // nu^T S^-1 nu against the state before the update
+};
+
+class EkfSlam {
+ public:
+  // Validates the parameters and preallocates every workspace. The filter starts at the world
+  // origin with a zero covariance and no landmark.
+  explicit EkfSlam(const EkfSlamParams& params);
+  const Status& initStatus() const { return init_status_; }
+
+  // Restarts at T_world_cam with pose covariance P0 ([dtheta, dt], symmetric positive
+  // semi-definite) and no landmark. Landmark ids keep increasing across resets.
+  Status reset(const Eigen::Isometry3d& T_world_cam, const Matrix6d& P0);
+  // Prediction with the VME result T_cur_prev and its covariance R_u ([dtheta_u, dt_u], VME
+  // convention, symmetric positive semi-definite).
+  Status predict(const Eigen::Isometry3d& T_cur_prev, const Matrix6d& R_u);
+  // Gates and applies the observations of one frame; results[k] describes obs[k].
+  Status update(const std::vector<LandmarkObservation>& obs,
+                std::vector<ObservationResult>& results);
+  // Adds the landmark measured at z_cam (current camera frame, m) with covariance R_z (m^2,
+  // symmetric positive semi-definite); returns its id. failedPrecondition when the state is full.
+  Result<int> addLandmark(const Eigen::Vector3d& z_cam, const Eigen::Matrix3d& R_z);
+  // Removes landmark `id` from the state; its final position and covariance go to m_world and
+  // cov when they are not null.
+  Status removeLandmark(int id, Eigen::Vector3d* m_world, Eigen::Matrix3d* cov);
+
+  const Eigen::Isometry3d& pose() const { return T_world_cam_; }
+  Matrix6d poseCovariance() const;  // [dtheta (rad), dt (m)]
+  // Position (m) and 3x3 covariance (m^2) of landmark `id`; notFound when it is not in the state.
+  Status landmark(int id, Eigen::Vector3d& m_world, Eigen::Matrix3d& cov) const;
+  int numLandmarks() const { return static_cast<int>(ids_.size()); }
+  const std::vector<int>& landmarkIds() const { return ids_; }  // in state order
+  int stateDim() const { return 6 + 3 * numLandmarks(); }
+  // The full symmetric covariance, stateDim()^2, in the order [pose, landmarkIds()...].
+  // Allocates: for tests and diagnostics.
+  Eigen::MatrixXd covariance() const;
+
+ private:
+  int slotOf(int id) const;
+  // out.topRows(n) = columns [c0, c0 + k) of the full P, from the stored lower triangle.
+  void gatherColumns(int c0, int k, Eigen::MatrixXd& out) const;
+  Status checkObservations(const std::vector<LandmarkObservation>& obs) const;
+  Status applyBatch(const std::vector<LandmarkObservation>& obs, const int* idx, int count);
+  void inject(int n);
+
+  EkfSlamParams params_;
+  Status init_status_;
+  Eigen::Isometry3d T_world_cam_ = Eigen::Isometry3d::Identity();
+  Eigen::Matrix3Xd m_world_;     // 3 x max_landmarks, the first numLandmarks() columns used
+  Eigen::MatrixXd P_;            // capacity^2; lower triangle of the active stateDim()^2 block
+  std::vector<int> ids_;         // id of each state slot
+  std::vector<int> slot_of_id_;  // state slot of each id, -1 once removed
+  int next_id_ = 0;
+  // Workspaces (capacity rows).
+  Eigen::MatrixXd P_pose_;   // n x 6, full P columns of the pose
+  Eigen::MatrixXd P_lm_;     // n x 3, full P columns of one landmark
+  Eigen::MatrixXd A_, B_;    // n x 2m: [K D] and [M K]
+  Eigen::MatrixXd S_, L_;    // m x m: innovation covariance and its Cholesky factor
+  Eigen::MatrixXd W_;        // m x n: L^-1 M^T, then K^T
+  Eigen::VectorXd nu_, dx_;  // m, n
+  std::vector<int> accepted_;
+};
+
+}  // namespace svslam
