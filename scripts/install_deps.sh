@@ -5,7 +5,10 @@ export DEBIAN_FRONTEND=noninteractive
 APT="apt-get -o DPkg::Lock::Timeout=600 -y -q"
 packages=(build-essential cmake pkg-config git
           libopencv-dev libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
-          libyaml-cpp-dev)
+          libyaml-cpp-dev
+          # cross step of .ci/run (scripts/cross_test_arm.sh): ARM cross compilers, qemu-user
+          # and GoogleTest's sources to build for the target
+          g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user-static googletest)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

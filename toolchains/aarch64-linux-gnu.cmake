@@ -7,7 +7,12 @@ set(CMAKE_SYSTEM_PROCESSOR aarch64)
 set(CMAKE_C_COMPILER aarch64-linux-gnu-gcc)
 set(CMAKE_CXX_COMPILER aarch64-linux-gnu-g++)
 
-set(CMAKE_FIND_ROOT_PATH /usr/aarch64-linux-gnu)
+# Target libraries: the cross toolchain's own folder, then Debian multiarch packages
+# (dpkg --add-architecture; apt-get install libfoo-dev:<arch>) under "/", where
+# CMAKE_LIBRARY_ARCHITECTURE (from the compiler) selects /usr/lib/aarch64-linux-gnu;
+# then SVSLAM_TARGET_ROOT if set: a folder of the target's .debs unpacked with dpkg-deb -x.
+set(CMAKE_FIND_ROOT_PATH /usr/aarch64-linux-gnu / ${SVSLAM_TARGET_ROOT})
+list(APPEND CMAKE_TRY_COMPILE_PLATFORM_VARIABLES SVSLAM_TARGET_ROOT)
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)

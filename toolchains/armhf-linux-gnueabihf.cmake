@@ -10,7 +10,12 @@ set(CMAKE_CXX_COMPILER arm-linux-gnueabihf-g++)
 set(CMAKE_C_FLAGS_INIT "-mfpu=neon -mfloat-abi=hard")
 set(CMAKE_CXX_FLAGS_INIT "-mfpu=neon -mfloat-abi=hard")
 
-set(CMAKE_FIND_ROOT_PATH /usr/arm-linux-gnueabihf)
+# Target libraries: the cross toolchain's own folder, then Debian multiarch packages
+# (dpkg --add-architecture; apt-get install libfoo-dev:<arch>) under "/", where
+# CMAKE_LIBRARY_ARCHITECTURE (from the compiler) selects /usr/lib/arm-linux-gnueabihf;
+# then SVSLAM_TARGET_ROOT if set: a folder of the target's .debs unpacked with dpkg-deb -x.
+set(CMAKE_FIND_ROOT_PATH /usr/arm-linux-gnueabihf / ${SVSLAM_TARGET_ROOT})
+list(APPEND CMAKE_TRY_COMPILE_PLATFORM_VARIABLES SVSLAM_TARGET_ROOT)
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
