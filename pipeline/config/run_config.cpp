@@ -48,6 +48,7 @@ Status readStereoMatch(ConfigReader& r, StereoMatchParams& m) {
   SVSLAM_TRY(r.read("stereo_match.max_disp_px", m.max_disp_px, 1, 1024));
   SVSLAM_TRY(r.read("stereo_match.min_zncc", m.min_zncc, -1, 1));
   SVSLAM_TRY(r.read("stereo_match.ratio", m.ratio, 0.01, 1));
+  SVSLAM_TRY(r.read("stereo_match.ratio_floor", m.ratio_floor, 0, 1));
   SVSLAM_TRY(r.read("stereo_match.prior_radius_px", m.prior_radius_px, 1, 64));
   SVSLAM_TRY(r.read("stereo_match.continuity_check", m.continuity_check));
   SVSLAM_TRY(r.read("stereo_match.continuity_threshold_px", m.continuity_threshold_px, 0.01, 1024));
@@ -125,6 +126,10 @@ Status readSlam(ConfigReader& r, SlamSystemParams& p) {
   SVSLAM_TRY(r.read("slam.reperception_max_radius_px", p.reperception_max_radius_px, 0.01, 1000));
   SVSLAM_TRY(r.read("slam.reperception_min_zncc", p.reperception_min_zncc, -1, 1));
   SVSLAM_TRY(r.read("slam.patch_half_px", p.patch_half_px, 1, 15));
+  SVSLAM_TRY(r.read("slam.max_reperceptions", p.max_reperceptions, 0, 10000));
+  SVSLAM_TRY(r.read("slam.max_observations", p.max_observations, 1, 10000));
+  SVSLAM_TRY(r.read("slam.track_tolerance_px", p.track_tolerance_px, 0.01, 100));
+  SVSLAM_TRY(r.read("slam.landmark_exclusion_px", p.landmark_exclusion_px, 0, 100));
   SVSLAM_TRY(r.read("slam.retire_unseen_frames", p.retire_unseen_frames, 1, 100000));
   SVSLAM_TRY(r.read("slam.lost_rot_sigma_rad", p.lost_rot_sigma_rad, 1e-6, 10));
   SVSLAM_TRY(r.read("slam.lost_trans_sigma_m", p.lost_trans_sigma_m, 1e-6, 1000));

@@ -6,20 +6,23 @@
 namespace svslam {
 namespace {
 
-// Circumcircle of (a, b, c); r2 = +inf for collinear points (always "contains").
+// Circumcircle of (a, b, c), computed in coordinates relative to a (keeps the squared terms
+// small next to the far super-triangle); r2 = +inf for collinear points (always "contains").
 void circumcircle(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
                   double& cx, double& cy, double& r2) {
-  const double d = 2.0 * (a.x() * (b.y() - c.y()) + b.x() * (c.y() - a.y()) +
-                          c.x() * (a.y() - b.y()));
+  const Eigen::Vector2d B = b - a, C = c - a;
+  const double d = 2.0 * (B.x() * C.y() - B.y() * C.x());
   if (std::abs(d) < 1e-12) {
     cx = cy = 0;
     r2 = HUGE_VAL;
     return;
   }
-  const double a2 = a.squaredNorm(), b2 = b.squaredNorm(), c2 = c.squaredNorm();
-  cx = (a2 * (b.y() - c.y()) + b2 * (c.y() - a.y()) + c2 * (a.y() - b.y())) / d;
-  cy = (a2 * (c.x() - b.x()) + b2 * (a.x() - c.x()) + c2 * (b.x() - a.x())) / d;
-  r2 = (a.x() - cx) * (a.x() - cx) + (a.y() - cy) * (a.y() - cy);
+  const double b2 = B.squaredNorm(), c2 = C.squaredNorm();
+  const double ux = (C.y() * b2 - B.y() * c2) / d;
+  const double uy = (B.x() * c2 - C.x() * b2) / d;
+  cx = a.x() + ux;
+  cy = a.y() + uy;
+  r2 = ux * ux + uy * uy;
 }
 
 }  // namespace
@@ -40,9 +43,14 @@ Status Delaunay::process(const std::vector<Eigen::Vector2d>& pts, std::vector<Tr
   const double span = std::max({maxx - minx, maxy - miny, 1.0});
   const double mx = 0.5 * (minx + maxx), my = 0.5 * (miny + maxy);
   p_.assign(pts.begin(), pts.end());
-  p_.emplace_back(mx - 20 * span, my - span);
-  p_.emplace_back(mx + 20 * span, my - span);
-  p_.emplace_back(mx, my + 20 * span);
+  // The super-triangle must be far enough that no circumcircle of three nearly collinear hull
+  // points reaches its corners (else hull triangles are lost), yet near enough that the
+  // circumcircle tests of co-circular input points keep their precision: 1e3 spans (tested on
+  // random sets and on a grid).
+  constexpr double kFar = 1e3;
+  p_.emplace_back(mx - kFar * span, my - span);
+  p_.emplace_back(mx + kFar * span, my - span);
+  p_.emplace_back(mx, my + kFar * span);
   tris_.clear();
   auto add = [&](int a, int b, int c) {
     Work w{a, b, c, 0, 0, 0};
@@ -83,7 +91,12 @@ Status Delaunay::process(const std::vector<Eigen::Vector2d>& pts, std::vector<Tr
 
 int Delaunay::locate(const std::vector<Eigen::Vector2d>& pts, const std::vector<Triangle2>& tris,
                      const Eigen::Vector2d& p, Eigen::Vector3d& bary) {
-  constexpr double kEps = 1e-9;
+  // The triangle whose smallest barycentric coordinate is largest: exact containment gives
+  // >= 0; a point on a shared edge may come out slightly negative in every triangle after
+  // rounding (e.g. with fused multiply-add), hence the tolerance.
+  constexpr double kEps = 1e-7;
+  int best = -1;
+  double best_min = -kEps;
   for (std::size_t k = 0; k < tris.size(); ++k) {
     const Eigen::Vector2d& a = pts[static_cast<std::size_t>(tris[k].v[0])];
     const Eigen::Vector2d& b = pts[static_cast<std::size_t>(tris[k].v[1])];
@@ -93,12 +106,15 @@ int Delaunay::locate(const std::vector<Eigen::Vector2d>& pts, const std::vector<
     const double l1 = ((p.x() - a.x()) * (c.y() - a.y()) - (c.x() - a.x()) * (p.y() - a.y())) / det;
     const double l2 = ((b.x() - a.x()) * (p.y() - a.y()) - (p.x() - a.x()) * (b.y() - a.y())) / det;
     const double l0 = 1.0 - l1 - l2;
-    if (l0 >= -kEps && l1 >= -kEps && l2 >= -kEps) {
+    const double m = std::min({l0, l1, l2});
+    if (m >= best_min) {
+      best_min = m;
+      best = static_cast<int>(k);
       bary = {l0, l1, l2};
-      return static_cast<int>(k);
+      if (m >= 0.0) return best;  // strictly inside (or on the boundary): done
     }
   }
-  return -1;
+  return best;
 }
 
 }  // namespace svslam

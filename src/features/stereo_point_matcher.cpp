@@ -17,6 +17,8 @@ Status StereoMatchParams::validate() const {
     return Status::invalidArgument("stereo_match.min_zncc must be in -1..1");
   if (!(ratio > 0.0f && ratio <= 1.0f))
     return Status::invalidArgument("stereo_match.ratio must be in (0, 1]");
+  if (!(ratio_floor >= 0.0f && ratio_floor <= 1.0f))
+    return Status::invalidArgument("stereo_match.ratio_floor must be in 0..1");
   if (prior_radius_px < 1) return Status::invalidArgument("stereo_match.prior_radius_px must be >= 1");
   if (!(continuity_threshold_px > 0.0f))
     return Status::invalidArgument("stereo_match.continuity_threshold_px must be > 0");
@@ -65,7 +67,7 @@ bool StereoPointMatcher::searchRow(ImageView<const std::uint8_t> left,
   float second = -1.0f;
   for (int i = 0; i <= d1 - d0; ++i)
     if (std::abs(i - best) > 1) second = std::max(second, scores_[static_cast<std::size_t>(i)]);
-  if (1.0f - sb > params_.ratio * (1.0f - second)) return false;
+  if (std::max(1.0f - sb, params_.ratio_floor) > params_.ratio * (1.0f - second)) return false;
   // A peak on the border of the searched range may be a slope towards a peak outside it.
   if (best == 0 || best == d1 - d0) return false;
   const float sm = scores_[static_cast<std::size_t>(best - 1)];

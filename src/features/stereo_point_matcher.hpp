@@ -5,7 +5,9 @@
 //    right image along the same row, at integer disparities d in [min_disp, max_disp) or, where
 //    a dense disparity prior exists, in [prior - prior_radius, prior + prior_radius].
 //    Accepted when zncc_best >= min_zncc and the ratio test holds on the dissimilarity
-//    c = 1 - zncc: c_best <= ratio * c_second, the second best taken at |d - d_best| > 1.
+//    c = 1 - zncc: max(c_best, ratio_floor) <= ratio * c_second, the second best taken at
+//    |d - d_best| > 1 (the floor: on a repeated pattern both peaks are near 1 and their tiny
+//    dissimilarities would compare by sampling noise).
 //    Sub-pixel disparity by a parabola through the scores at d-1, d, d+1.
 // 2. Disparity continuity (seed 002 eq. 10): the 3 nearest accepted neighbours (left image) of
 //    each match must all satisfy |d_i - d_n| < continuity_threshold_px; otherwise rejected.
@@ -33,6 +35,8 @@ struct StereoMatchParams {
   int max_disp_px = 128;        // > min_disp_px
   float min_zncc = 0.8f;        // acceptance threshold, -1..1
   float ratio = 0.8f;           // ratio test on 1 - zncc, (0, 1]
+  float ratio_floor = 0.05f;    // c_best is taken as at least this in the ratio test, so two
+                                // near-perfect peaks (repeated texture) are ambiguous, 0..1
   int prior_radius_px = 2;      // search half-range around a dense prior, px, >= 1
   bool continuity_check = true;
   float continuity_threshold_px = 10.0f;  // d_th of seed 002 eq. 10, px, > 0

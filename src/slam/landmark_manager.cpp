@@ -5,36 +5,63 @@
 
 namespace svslam {
 
-void LandmarkManager::add(int id, int frame, ImageView<const std::uint8_t> img, float u, float v) {
+void LandmarkManager::add(int id, int frame, ImageView<const std::uint8_t> img, int x, int y,
+                          const Eigen::Isometry3d& T_world_cam, const Eigen::Vector3d& p_cam) {
   MapLandmark m;
   m.id = id;
   m.active = true;
   m.created_frame = frame;
   info_[id] = m;
-  patches_[id].resize(static_cast<std::size_t>(patchSide() * patchSide()));
-  observed(id, frame, img, u, v);
+  observed(id, frame, static_cast<float>(x), static_cast<float>(y));
   info_[id].observations = 0;
+  views_[id] = {T_world_cam.linear(), p_cam};
+  const int s = 2 * big_ + 1;
+  std::vector<std::uint8_t>& p = patches_[id];
+  p.resize(static_cast<std::size_t>(s * s));
+  for (int dy = -big_; dy <= big_; ++dy)
+    for (int dx = -big_; dx <= big_; ++dx)
+      p[static_cast<std::size_t>((dy + big_) * s + dx + big_)] =
+          img(std::clamp(x + dx, 0, img.width - 1), std::clamp(y + dy, 0, img.height - 1));
 }
 
-void LandmarkManager::observed(int id, int frame, ImageView<const std::uint8_t> img, float u,
-                               float v) {
+bool LandmarkManager::templateFor(int id, const Eigen::Matrix3d& R_world_cam,
+                                  const Eigen::Vector3d& p_cam_now, double f_px,
+                                  std::uint8_t* out) const {
+  const View& v = views_.at(id);
+  const double z = p_cam_now.z();
+  if (!(z > 0.0) || !(v.p_cam.z() > 0.0)) return false;
+  Eigen::Matrix<double, 2, 3> J;
+  J << f_px / z, 0, -f_px * p_cam_now.x() / (z * z), 0, f_px / z, -f_px * p_cam_now.y() / (z * z);
+  const Eigen::Matrix3d R_now_init = R_world_cam.transpose() * v.R_world_cam;
+  const Eigen::Matrix2d A = J * R_now_init.leftCols<2>() * (v.p_cam.z() / f_px);
+  const double det = A.determinant();
+  if (!(std::abs(det) > 1e-6)) return false;
+  const Eigen::Matrix2d Ai = A.inverse();  // delta_init = Ai delta_now
+  const std::vector<std::uint8_t>& p = patches_.at(id);
+  const int s = 2 * big_ + 1;
+  for (int dy = -h_; dy <= h_; ++dy)
+    for (int dx = -h_; dx <= h_; ++dx) {
+      const Eigen::Vector2d q = Ai * Eigen::Vector2d(dx, dy) + Eigen::Vector2d(big_, big_);
+      const int x0 = static_cast<int>(std::floor(q.x())), y0 = static_cast<int>(std::floor(q.y()));
+      if (x0 < 0 || y0 < 0 || x0 + 1 >= s || y0 + 1 >= s) return false;
+      const double ax = q.x() - x0, ay = q.y() - y0;
+      auto at = [&](int xx, int yy) {
+        return static_cast<double>(p[static_cast<std::size_t>(yy * s + xx)]);
+      };
+      const double val = (1 - ay) * ((1 - ax) * at(x0, y0) + ax * at(x0 + 1, y0)) +
+                         ay * ((1 - ax) * at(x0, y0 + 1) + ax * at(x0 + 1, y0 + 1));
+      out[(dy + h_) * (2 * h_ + 1) + dx + h_] = static_cast<std::uint8_t>(std::lround(val));
+    }
+  return true;
+}
+
+void LandmarkManager::observed(int id, int frame, float u, float v) {
   MapLandmark& m = info_.at(id);
   m.last_seen_frame = frame;
   m.last_u_px = u;
   m.last_v_px = v;
   ++m.observations;
-  const int x = std::clamp(static_cast<int>(std::lround(u)), h_, img.width - h_ - 1);
-  const int y = std::clamp(static_cast<int>(std::lround(v)), h_, img.height - h_ - 1);
-  const int s = patchSide();
-  std::vector<std::uint8_t>& p = patches_.at(id);
-  for (int dy = 0; dy < s; ++dy)
-    for (int dx = 0; dx < s; ++dx)
-      p[static_cast<std::size_t>(dy * s + dx)] = img(x - h_ + dx, y - h_ + dy);
 }
 
-ImageView<const std::uint8_t> LandmarkManager::patch(int id) const {
-  const auto& p = patches_.at(id);
-  return ImageView<const std::uint8_t>(p.data(), patchSide(), patchSide(), patchSide());
-}
 
 }  // namespace svslam

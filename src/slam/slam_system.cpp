@@ -25,6 +25,7 @@ Status SlamSystemParams::validate() const {
       !(reperception_max_radius_px > 0.0))
     return Status::invalidArgument("slam tolerances and radii must be > 0");
   if (max_reperceptions < 0) return Status::invalidArgument("slam.max_reperceptions must be >= 0");
+  if (max_observations < 1) return Status::invalidArgument("slam.max_observations must be >= 1");
   if (!(landmark_exclusion_px >= 0.0))
     return Status::invalidArgument("slam.landmark_exclusion_px must be >= 0");
   if (!(reperception_min_zncc >= -1.0f && reperception_min_zncc <= 1.0f))
@@ -88,6 +89,7 @@ struct Prediction {
   double u = 0, v = 0, d = 0;  // predicted pixel and disparity
   double sigma_px = 0;         // of the projection
   double sigma_d = 0;          // of the disparity
+  Eigen::Vector3d z_cam = Eigen::Vector3d::Zero();  // predicted point in the camera frame
   bool tracked = false;        // observed in the previous frame
 };
 
@@ -117,6 +119,7 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     pr.u = f * z.x() / z.z() + calib_.cx_px;
     pr.v = f * z.y() / z.z() + calib_.cy_px;
     pr.d = f * b / z.z();
+    pr.z_cam = z;
     if (pr.u < h + 1 || pr.v < h + 1 || pr.u >= calib_.width - h - 2 ||
         pr.v >= calib_.height - h - 2)
       continue;
@@ -139,13 +142,17 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     preds.push_back(pr);
     ++out.predicted_visible;
   }
-  // Re-perceptions: the best predicted ones first, at most max_reperceptions.
-  std::stable_sort(preds.begin(), preds.end(), [](const Prediction& a, const Prediction& c) {
-    if (a.tracked != c.tracked) return a.tracked;
-    return a.sigma_px < c.sigma_px;
+  // Order of the searches: re-perceptions first (the best predicted first, at most
+  // max_reperceptions: they close loops), then the tracked landmarks, oldest first (they carry
+  // the longest memory); at most max_observations observations per frame (bounded update cost).
+  std::stable_sort(preds.begin(), preds.end(), [&](const Prediction& a, const Prediction& c) {
+    if (a.tracked != c.tracked) return !a.tracked;
+    if (!a.tracked) return a.sigma_px < c.sigma_px;
+    return landmarks_.info(a.id).created_frame < landmarks_.info(c.id).created_frame;
   });
   int reperceptions = 0;
   for (const Prediction& pr : preds) {
+    if (static_cast<int>(obs_.size()) >= params_.max_observations) break;
     if (!pr.tracked && reperceptions >= params_.max_reperceptions) continue;
     if (!pr.tracked) ++reperceptions;
     const double tol = pr.tracked ? params_.track_tolerance_px : params_.reperception_tolerance_px;
@@ -156,7 +163,12 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     const int y0 = std::max(h + 1, static_cast<int>(std::lround(pr.v)) - r);
     const int y1 = std::min(calib_.height - h - 2, static_cast<int>(std::lround(pr.v)) + r);
     if (x1 < x0 || y1 < y0) continue;
-    const ImageView<const std::uint8_t> patch = landmarks_.patch(pr.id);
+    // The landmark's patch warped to the predicted view.
+    const int side = 2 * h + 1;
+    tmpl_.resize(static_cast<std::size_t>(side * side));
+    if (!landmarks_.templateFor(pr.id, T_wc.linear(), pr.z_cam, calib_.f_px, tmpl_.data()))
+      continue;
+    const ImageView<const std::uint8_t> patch(tmpl_.data(), side, side, side);
     const PatchStats ps = patchStats(patch, h, h, h);
     if (ps.inv_norm == 0.0) continue;
     if (!pr.tracked) {
@@ -294,13 +306,17 @@ void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameRe
       continue;
     }
     if (!makeRoom(out)) continue;  // stays a candidate
+    // Initialised at the pixel its disparity was measured at (the row search runs on the
+    // nearest pixel), which is also the centre of its appearance patch.
+    const float x = std::round(p.u_px), y = std::round(p.v_px);
     const StereoPoint sp =
-        reprojectPixel(calib_, p.u_px, p.v_px, p.d_px, p.sigma_d_px, params_.init_sigma_uv_px);
+        reprojectPixel(calib_, x, y, p.d_px, p.sigma_d_px, params_.init_sigma_uv_px);
     auto id = ekf_.addLandmark(sp.p_cam, sp.cov);
     t.candidate = false;
     if (!id) continue;
-    landmarks_.add(*id, frame_, left, p.u_px, p.v_px);
-    landmark_uv_.emplace_back(p.u_px, p.v_px);
+    landmarks_.add(*id, frame_, left, static_cast<int>(x), static_cast<int>(y), ekf_.pose(),
+                   sp.p_cam);
+    landmark_uv_.emplace_back(x, y);
     ++out.added;
   }
 
@@ -366,7 +382,7 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left,
           ++out.gated;
           continue;
         }
-        landmarks_.observed(obs_[i].id, frame_, left, obs_uv_[i].x(), obs_uv_[i].y());
+        landmarks_.observed(obs_[i].id, frame_, obs_uv_[i].x(), obs_uv_[i].y());
         landmark_uv_.push_back(obs_uv_[i]);
       }
     }

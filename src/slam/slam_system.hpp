@@ -17,7 +17,9 @@
 //     disparity. A landmark observed in the previous frame uses the 0.5 px matching error of
 //     consecutive frames and track_tolerance_px; one unseen for longer (re-perception, e.g.
 //     after a loop) the 1 px error and reperception_tolerance_px (seed 001 sec 4.1), at most
-//     max_reperceptions per frame, the best predicted first. Chi-square gating in the filter;
+//     max_reperceptions per frame, the best predicted first, searched first; then the tracked
+//     landmarks, oldest first, up to max_observations per frame (bounded update cost). The
+//     patch is warped to the predicted view (LandmarkManager::templateFor). Chi-square gating;
 //  4. landmark selection: about candidate_fraction of the new matches (points matched for the
 //     first time) become candidates, the most precise first, in grid cells holding fewer than
 //     max_per_cell landmarks and candidates (spread over the image); a candidate tracked over
@@ -57,7 +59,8 @@ struct SlamSystemParams {
   double reperception_matching_error_px = 1.0;  // re-perceiving after a loop (seed: 1 px)
   double track_tolerance_px = 1.5;          // consecutive frames (seed: 1.5 px)
   double reperception_tolerance_px = 2.5;   // (seed: about 2.5 px)
-  int max_reperceptions = 40;               // re-perception searches per frame, >= 0
+  int max_reperceptions = 10;               // re-perception searches per frame, >= 0
+  int max_observations = 30;                // landmark observations per frame, >= 1
   double landmark_exclusion_px = 2.0;       // see step 2, px, >= 0
   double reperception_max_radius_px = 60.0;  // cap of the search radius, px
   float reperception_min_zncc = 0.8f;
@@ -122,6 +125,7 @@ class SlamSystem {
   std::vector<Eigen::Vector2f> prev_landmark_uv_, landmark_uv_;  // observed landmarks, px
   std::vector<ObservationResult> results_;
   std::vector<float> scores_;
+  std::vector<std::uint8_t> tmpl_;  // warped landmark template
   std::vector<int> cell_count_;
   int frame_ = 0;
 };
