@@ -64,9 +64,17 @@ bool StereoPointMatcher::searchRow(ImageView<const std::uint8_t> left,
   }
   const float sb = scores_[static_cast<std::size_t>(best)];
   if (sb < params_.min_zncc) return false;
+  // Second best: the highest other local maximum of the score curve (the flanks of the best
+  // peak are not competitors, whatever their height on a smooth patch).
   float second = -1.0f;
-  for (int i = 0; i <= d1 - d0; ++i)
-    if (std::abs(i - best) > 1) second = std::max(second, scores_[static_cast<std::size_t>(i)]);
+  const int last = d1 - d0;
+  for (int i = 0; i <= last; ++i) {
+    if (std::abs(i - best) <= 1) continue;
+    const float si = scores_[static_cast<std::size_t>(i)];
+    const bool peak = (i == 0 || si >= scores_[static_cast<std::size_t>(i - 1)]) &&
+                      (i == last || si >= scores_[static_cast<std::size_t>(i + 1)]);
+    if (peak) second = std::max(second, si);
+  }
   if (std::max(1.0f - sb, params_.ratio_floor) > params_.ratio * (1.0f - second)) return false;
   // A peak on the border of the searched range may be a slope towards a peak outside it.
   if (best == 0 || best == d1 - d0) return false;

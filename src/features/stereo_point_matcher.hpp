@@ -5,8 +5,9 @@
 //    right image along the same row, at integer disparities d in [min_disp, max_disp) or, where
 //    a dense disparity prior exists, in [prior - prior_radius, prior + prior_radius].
 //    Accepted when zncc_best >= min_zncc and the ratio test holds on the dissimilarity
-//    c = 1 - zncc: max(c_best, ratio_floor) <= ratio * c_second, the second best taken at
-//    |d - d_best| > 1 (the floor: on a repeated pattern both peaks are near 1 and their tiny
+//    c = 1 - zncc: max(c_best, ratio_floor) <= ratio * c_second, the second best being the
+//    highest other local maximum of the score curve at |d - d_best| > 1 (the flanks of the best
+//    peak do not compete; the floor: on a repeated pattern both peaks are near 1 and their tiny
 //    dissimilarities would compare by sampling noise).
 //    Sub-pixel disparity by a parabola through the scores at d-1, d, d+1.
 // 2. Disparity continuity (seed 002 eq. 10): the 3 nearest accepted neighbours (left image) of
