@@ -21,12 +21,14 @@
 #   apt-get install g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user-static \
 #                   googletest libeigen3-dev cmake
 # binfmt_misc is not needed: the emulator is called explicitly.
-# Build trees go to $SVSLAM_CROSS_BUILD_ROOT (default /tmp/svslam-cross), never the source tree.
+# Build trees go to $SVSLAM_CROSS_BUILD_ROOT (default build-cross/ in this checkout, git-ignored).
 # JOBS (default nproc) sets build and ctest parallelism.
 set -euo pipefail
 
 src_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build_root="${SVSLAM_CROSS_BUILD_ROOT:-/tmp/svslam-cross}"
+# Default build trees live in this checkout (build-cross/, ignored by git): a tree shared between
+# checkouts would hold a CMake cache of another source folder and fail to configure.
+build_root="${SVSLAM_CROSS_BUILD_ROOT:-$src_dir/build-cross}"
 jobs="${JOBS:-$(nproc)}"
 targets=("$@")
 [[ ${#targets[@]} -eq 0 ]] && targets=(aarch64 armhf)
