@@ -63,8 +63,7 @@ void StereoOdometry::resetTracking() {
   last_motion_ = Eigen::Isometry3d::Identity();
 }
 
-void StereoOdometry::buildPoints(ImageView<const std::uint8_t> left) {
-  (void)left;
+void StereoOdometry::buildPoints() {
   cur_.clear();
   const double min_d = std::max(params_.min_disparity_px,
                                 calib_.f_px * calib_.baseline_m / params_.max_depth_m);
@@ -205,7 +204,7 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
                                          have_rois_ ? &ranges_ : nullptr);
       !s)
     return s;
-  buildPoints(left);
+  buildPoints();
   out.stereo_points = static_cast<int>(cur_.size());
   for (int y = 0; y < left.height; ++y)
     std::memcpy(cur_left_.row(y), left.row(y), static_cast<std::size_t>(left.width));

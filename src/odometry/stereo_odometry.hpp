@@ -125,7 +125,7 @@ class StereoOdometry {
   void resetTracking();
 
  private:
-  void buildPoints(ImageView<const std::uint8_t> left);
+  void buildPoints();  // cur_ from stereo_
   // ROI tracking: filters corner_px_ and fills ranges_ / regions_ from the previous clusters.
   void applyRois(OdometryFrameResult& out);
 

@@ -12,7 +12,7 @@ void LandmarkManager::add(int id, int frame, ImageView<const std::uint8_t> img, 
   m.active = true;
   m.created_frame = frame;
   info_[id] = m;
-  observed(id, frame, static_cast<float>(x), static_cast<float>(y));
+  observed(id, frame);
   info_[id].observations = 0;
   views_[id] = {T_world_cam.linear(), p_cam};
   const int s = 2 * big_ + 1;
@@ -55,11 +55,9 @@ bool LandmarkManager::templateFor(int id, const Eigen::Matrix3d& R_world_cam,
   return true;
 }
 
-void LandmarkManager::observed(int id, int frame, float u, float v) {
+void LandmarkManager::observed(int id, int frame) {
   MapLandmark& m = info_.at(id);
   m.last_seen_frame = frame;
-  m.last_u_px = u;
-  m.last_v_px = v;
   ++m.observations;
 }
 

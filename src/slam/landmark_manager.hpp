@@ -8,7 +8,7 @@
 // the landmark was initialised from, and never updated, so that every observation refers to
 // the same world point: an updated template would drift by its re-centring) with the camera
 // pose and the camera-frame point of that moment, so the patch can be warped to the predicted
-// view (templateFor), where and when they were last observed, and, once
+// view (templateFor), when they were last observed, and, once
 // retired from the filter state, their final position and covariance (kept in the map file, out
 // of the state).
 #include <Eigen/Core>
@@ -33,7 +33,6 @@ struct MapLandmark {
   bool active = false;  // in the filter state (else retired)
   int created_frame = 0;
   int last_seen_frame = 0;
-  float last_u_px = 0, last_v_px = 0;  // left image position at the last observation
   int observations = 0;
 };
 
@@ -55,8 +54,8 @@ class LandmarkManager {
   // template leaves the stored patch. `out` is a (2h+1)^2 buffer (row-major).
   bool templateFor(int id, const Eigen::Matrix3d& R_world_cam, const Eigen::Vector3d& p_cam_now,
                    double f_px, std::uint8_t* out) const;
-  // A new observation at (u, v): last position and frame updated.
-  void observed(int id, int frame, float u, float v);
+  // A new observation in `frame`.
+  void observed(int id, int frame);
 
   MapLandmark& info(int id) { return info_.at(id); }
   const MapLandmark& info(int id) const { return info_.at(id); }

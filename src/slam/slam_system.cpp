@@ -54,26 +54,27 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
   cell_count_.resize(static_cast<std::size_t>(params.grid_cols * params.grid_rows));
 }
 
+bool SlamSystem::nearLandmark(const std::vector<Eigen::Vector2f>& landmarks_uv, float u,
+                              float v) const {
+  const float r2 = static_cast<float>(params_.landmark_exclusion_px * params_.landmark_exclusion_px);
+  for (const Eigen::Vector2f& l : landmarks_uv) {
+    const float du = l.x() - u, dv = l.y() - v;
+    if (du * du + dv * dv <= r2) return true;
+  }
+  return false;
+}
+
 void SlamSystem::passTracks() {
   const auto& matches = vo_.matches();
   const auto& prev = vo_.previousPoints();
   cur_tracks_.assign(vo_.points().size(), PointTrack{});
   exclude_.assign(matches.size(), 0);
-  const float r2 = static_cast<float>(params_.landmark_exclusion_px * params_.landmark_exclusion_px);
   for (std::size_t k = 0; k < matches.size(); ++k) {
     PointTrack t = prev_tracks_[static_cast<std::size_t>(matches[k].prev)];
     ++t.track_len;
     cur_tracks_[static_cast<std::size_t>(matches[k].cur)] = t;
-    bool on_landmark = false;
     const TrackPoint& p = prev[static_cast<std::size_t>(matches[k].prev)];
-    for (const Eigen::Vector2f& l : prev_landmark_uv_) {
-      const float du = l.x() - p.u_px, dv = l.y() - p.v_px;
-      if (du * du + dv * dv <= r2) {
-        on_landmark = true;
-        break;
-      }
-    }
-    exclude_[k] = (t.candidate || on_landmark) ? 1 : 0;
+    exclude_[k] = (t.candidate || nearLandmark(prev_landmark_uv_, p.u_px, p.v_px)) ? 1 : 0;
   }
 }
 
@@ -99,7 +100,6 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
                                  ImageView<const std::uint8_t> right, SlamFrameResult& out) {
   obs_.clear();
   obs_uv_.clear();
-  obs_reperceived_.clear();
   const int h = params_.patch_half_px;
   const Eigen::Isometry3d T_wc = ekf_.pose();
   const Eigen::Matrix3d Rt = T_wc.linear().transpose();
@@ -198,7 +198,6 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
       if (!vo_.observe(tp, params_.reperception_matching_error_px, sp)) continue;
       obs_.push_back({pr.id, sp.p_cam, sp.cov});
       obs_uv_.emplace_back(tp.u_px, tp.v_px);
-      obs_reperceived_.push_back(1);
       ++out.reperceived;
       continue;
     }
@@ -245,7 +244,6 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     if (!vo_.observe(tp, err, sp)) continue;
     obs_.push_back({pr.id, sp.p_cam, sp.cov});
     obs_uv_.emplace_back(u, v);
-    obs_reperceived_.push_back(pr.tracked ? 0 : 1);
     if (pr.tracked)
       ++out.observed;
     else
@@ -283,14 +281,7 @@ void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameRe
     return static_cast<std::size_t>(cy * params_.grid_cols + cx);
   };
   auto sigmaOf = [](const TrackPoint& p) { return std::sqrt(p.cov.trace()); };
-  const float r2 = static_cast<float>(params_.landmark_exclusion_px * params_.landmark_exclusion_px);
-  auto nearLandmark = [&](const TrackPoint& p) {
-    for (const Eigen::Vector2f& l : landmark_uv_) {
-      const float du = l.x() - p.u_px, dv = l.y() - p.v_px;
-      if (du * du + dv * dv <= r2) return true;
-    }
-    return false;
-  };
+  auto nearObserved = [&](const TrackPoint& p) { return nearLandmark(landmark_uv_, p.u_px, p.v_px); };
   std::fill(cell_count_.begin(), cell_count_.end(), 0);
   for (const Eigen::Vector2f& l : landmark_uv_) ++cell_count_[cellOf(l.x(), l.y())];
   for (std::size_t j = 0; j < pts.size(); ++j)
@@ -301,7 +292,7 @@ void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameRe
     PointTrack& t = cur_tracks_[j];
     if (!t.candidate || t.track_len < params_.candidate_min_frames) continue;
     const TrackPoint& p = pts[j];
-    if (sigmaOf(p) > params_.candidate_max_sigma_m || nearLandmark(p)) {
+    if (sigmaOf(p) > params_.candidate_max_sigma_m || nearObserved(p)) {
       t.candidate = false;
       continue;
     }
@@ -326,7 +317,7 @@ void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameRe
     const PointTrack& t = cur_tracks_[j];
     const int x = static_cast<int>(std::lround(pts[j].u_px));
     const int y = static_cast<int>(std::lround(pts[j].v_px));
-    if (t.track_len == 2 && !t.candidate && patchInside(left, x, y, h + 1) && !nearLandmark(pts[j]))
+    if (t.track_len == 2 && !t.candidate && patchInside(left, x, y, h + 1) && !nearObserved(pts[j]))
       fresh.push_back(static_cast<int>(j));
   }
   std::stable_sort(fresh.begin(), fresh.end(), [&](int a, int c) {
@@ -382,7 +373,7 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left,
           ++out.gated;
           continue;
         }
-        landmarks_.observed(obs_[i].id, frame_, obs_uv_[i].x(), obs_uv_[i].y());
+        landmarks_.observed(obs_[i].id, frame_);
         landmark_uv_.push_back(obs_uv_[i]);
       }
     }

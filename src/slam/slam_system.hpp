@@ -103,6 +103,8 @@ class SlamSystem {
   std::vector<MapLandmark> map() const;
 
  private:
+  // Whether (u, v) lies within landmark_exclusion_px of one of `landmarks_uv` (px).
+  bool nearLandmark(const std::vector<Eigen::Vector2f>& landmarks_uv, float u, float v) const;
   void passTracks();
   // Searches the landmarks of the state in the current pair; fills obs_ / obs_uv_.
   void searchLandmarks(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
@@ -121,7 +123,6 @@ class SlamSystem {
   std::vector<std::uint8_t> exclude_;
   std::vector<LandmarkObservation> obs_;
   std::vector<Eigen::Vector2f> obs_uv_;  // left image position of each observation
-  std::vector<std::uint8_t> obs_reperceived_;
   std::vector<Eigen::Vector2f> prev_landmark_uv_, landmark_uv_;  // observed landmarks, px
   std::vector<ObservationResult> results_;
   std::vector<float> scores_;
