@@ -6,6 +6,11 @@ APT="apt-get -o DPkg::Lock::Timeout=600 -y -q"
 packages=(build-essential cmake pkg-config git
           libopencv-dev libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
           libyaml-cpp-dev
+          # real-time pipeline and service: SPSC queues, LCM (lcm-gen, glib for lcm.pc),
+          # sd_notify, cameras (libcamera, v4l-utils for real hardware), iproute2 + util-linux
+          # for the multicast test in a private network namespace
+          libreaderwriterqueue-dev liblcm-dev liblcm-bin libglib2.0-dev libsystemd-dev
+          libcamera-dev v4l-utils iproute2 util-linux systemd
           # cross step of .ci/run (scripts/cross_test_arm.sh): ARM cross compilers, qemu-user
           # and GoogleTest's sources to build for the target
           g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user-static googletest)

@@ -19,6 +19,9 @@ constexpr const char* kUsage =
     "  fit-sigma        fit the curvature -> sigma_d model of the disparity on ground truth\n"
     "  run              visual odometry on a stereo sequence (default: built-in synthetic flight)\n"
     "  eval-trajectory  drift, ATE and RPE of a trajectory against ground truth (KITTI/TUM/EuRoC)\n"
+#ifdef SVSLAM_HAVE_LISTEN
+    "  listen           print the poses (with covariance) and stats published on LCM\n"
+#endif
     "\n"
     "Run 'svslam <command> --help' for the options of a command.\n";
 
@@ -41,6 +44,9 @@ int main(int argc, char** argv) {
     if (cmd == "fit-sigma") return svslam::cli::runFitSigma(args);
     if (cmd == "run") return svslam::cli::runRun(args);
     if (cmd == "eval-trajectory") return svslam::cli::runEvalTrajectory(args);
+#ifdef SVSLAM_HAVE_LISTEN
+    if (cmd == "listen") return svslam::cli::runListen(args);
+#endif
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "svslam %s: out of memory\n", cmd.c_str());
     return 1;
