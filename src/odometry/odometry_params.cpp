@@ -1,6 +1,6 @@
 #include <cmath>
 
-#include "odometry/stereo_odometry.hpp"
+#include "odometry/odometry_params.hpp"
 
 namespace svslam {
 

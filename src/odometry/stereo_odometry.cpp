@@ -9,42 +9,25 @@
 
 namespace svslam {
 
-namespace {
-CornerParams detectorParams(const StereoOdometryParams& p) {
-  CornerParams c = p.corners;
-  if (p.roi_tracking) c.threshold_rel *= p.unknown_threshold_factor;  // see applyRois()
-  return c;
-}
-}  // namespace
 
 StereoOdometry::StereoOdometry(const StereoOdometryParams& params, const StereoCalibration& calib)
     : params_(params),
       calib_(calib),
-      detector_(detectorParams(params), std::max(calib.width, 1), std::max(calib.height, 1)),
-      stereo_matcher_(params.stereo_match),
+      stage_(params, calib),
       temporal_matcher_(params.temporal_match),
       motion_(params.motion) {
   init_status_ = params.validate();
   if (init_status_) init_status_ = calib.validate();
-  if (init_status_) init_status_ = detector_.initStatus();
-  if (init_status_ && params.detector == PointDetector::kOrb) {
-    orb_ = std::make_unique<OrbExtractor>(params.orb, calib.width, calib.height);
-    init_status_ = orb_->initStatus();
-  }
+  if (init_status_) init_status_ = stage_.initStatus();
   if (init_status_ && params.roi_tracking) {
     clusterer_ = std::make_unique<FeatureClusters>(params.clusters);
     init_status_ = clusterer_->initStatus();
   }
-  if (init_status_ && params.dense) {
-    dense_ = std::make_unique<DenseStereo>(params.dense_stereo, calib.width, calib.height);
-    init_status_ = dense_->initStatus();
-  }
   if (init_status_) {
     prev_left_.resize(calib.width, calib.height);
     cur_left_.resize(calib.width, calib.height);
-    corners_.reserve(2048);
-    corner_px_.reserve(2048);
-    stereo_.reserve(2048);
+    own_.corner_px.reserve(2048);
+    own_.stereo.reserve(2048);
     prev_.reserve(2048);
     cur_.reserve(2048);
     matches_.reserve(2048);
@@ -67,11 +50,11 @@ void StereoOdometry::buildPoints() {
   cur_.clear();
   const double min_d = std::max(params_.min_disparity_px,
                                 calib_.f_px * calib_.baseline_m / params_.max_depth_m);
-  for (const StereoMatch& m : stereo_) {
+  for (const StereoMatch& m : in_->stereo) {
     if (!(m.d_px >= min_d)) continue;
     StereoPoint sp;
-    if (params_.dense) {
-      if (!neighbourhoodPoint(disparity_.disparity_px.cview(), disparity_.sigma_d_px.cview(),
+    if (disp_) {
+      if (!neighbourhoodPoint(disp_->disparity_px.cview(), disp_->sigma_d_px.cview(),
                               calib_, m.u_px, m.v_px, params_.match_sigma_px, 5, sp))
         continue;
     } else {
@@ -95,7 +78,9 @@ void StereoOdometry::applyRois(OdometryFrameResult& out) {
   have_rois_ = true;
   out.rois = static_cast<int>(roi_.rois.size());
   const float thr_roi = static_cast<float>(params_.corners.threshold_rel) *
-                        (orb_ ? 0.0f : detector_.lastMaxResponse());
+                        (params_.detector == PointDetector::kOrb ? 0.0f : own_.max_response);
+  std::vector<Eigen::Vector2f>& corner_px_ = own_.corner_px;
+  std::vector<float>& corner_resp_ = own_.corner_resp;
   // Keep: corners inside a left ROI that reach the normal threshold (disparity bounded by the
   // union of the right ROIs of the ROIs holding it), and corners of unknown cells (full range).
   std::size_t w = 0;
@@ -140,8 +125,8 @@ void StereoOdometry::applyRois(OdometryFrameResult& out) {
 
 bool StereoOdometry::observe(const TrackPoint& p, double matching_error_px,
                              StereoPoint& out) const {
-  if (dense_)
-    return neighbourhoodPoint(disparity_.disparity_px.cview(), disparity_.sigma_d_px.cview(),
+  if (disp_)
+    return neighbourhoodPoint(disp_->disparity_px.cview(), disp_->sigma_d_px.cview(),
                               calib_, p.u_px, p.v_px, matching_error_px, 5, out);
   if (!(p.d_px > 0.0f)) return false;
   out = reprojectPixel(calib_, p.u_px, p.v_px, p.d_px, p.sigma_d_px, matching_error_px);
@@ -159,9 +144,21 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
                                 ImageView<const std::uint8_t> right, OdometryFrameResult& out,
                                 Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;
+  if (Status s = stage_.process(left, right, own_, executor, observer); !s) return s;
+  return frontEnd(left, right, own_, out, executor, observer);
+}
+
+Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
+                                ImageView<const std::uint8_t> right,
+                                const StereoStageOutput& stereo, OdometryFrameResult& out,
+                                Executor& executor, StageObserver* observer) {
+  (void)executor;
+  if (!init_status_) return init_status_;
   if (left.width != calib_.width || left.height != calib_.height || right.width != calib_.width ||
       right.height != calib_.height)
     return Status::invalidArgument("odometry: image size differs from the calibration's");
+  if (stereo.has_disparity != params_.dense)
+    return Status::invalidArgument("odometry: the stereo stage output does not match the params");
   auto done = [&](const char* stage) {
     if (observer) observer->stageDone(stage);
   };
@@ -175,40 +172,28 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
     has_prev_ = true;
     completed_ = false;
   }
-  ImageView<const float> prior;
-  if (dense_) {
-    if (Status s = dense_->process(left, right, disparity_, executor); !s) return s;
-    prior = disparity_.disparity_px.cview();
-    done("dense_stereo");
-  }
-  corner_px_.clear();
-  corner_resp_.clear();
-  if (orb_) {
-    if (Status s = orb_->process(left, orb_kp_, orb_desc_); !s) return s;
-    for (const OrbKeypoint& k : orb_kp_) {
-      corner_px_.emplace_back(k.x_px, k.y_px);
-      corner_resp_.push_back(k.score);
-    }
-  } else {
-    if (Status s = detector_.process(left, corners_); !s) return s;
-    for (const Corner& c : corners_) {
-      corner_px_.emplace_back(c.x_px, c.y_px);
-      corner_resp_.push_back(c.response);
-    }
-  }
+  in_ = &stereo;
+  disp_ = stereo.has_disparity ? &stereo.disparity : nullptr;
   have_rois_ = false;
-  if (clusterer_ && has_prev_ && !prev_clusters_.empty()) applyRois(out);
-  out.corners = static_cast<int>(corner_px_.size());
-  done("detect");
-  if (Status s = stereo_matcher_.process(left, right, corner_px_, prior, stereo_, out.stereo_stats,
-                                         have_rois_ ? &ranges_ : nullptr);
-      !s)
-    return s;
+  const bool roi_mode = !stereo.matched;
+  if (roi_mode) {  // detection and matching depend on the previous frame's clusters
+    if (Status s = stage_.detect(left, own_); !s) return s;
+    if (clusterer_ && has_prev_ && !prev_clusters_.empty()) applyRois(out);
+    done("detect");
+    ImageView<const float> prior;
+    if (disp_) prior = disp_->disparity_px.cview();
+    if (Status s = stage_.match(left, right, prior, have_rois_ ? &ranges_ : nullptr, own_); !s)
+      return s;
+    own_.matched = true;
+    in_ = &own_;
+  }
+  out.corners = static_cast<int>(in_->corner_px.size());
+  out.stereo_stats = in_->stereo_stats;
   buildPoints();
   out.stereo_points = static_cast<int>(cur_.size());
   for (int y = 0; y < left.height; ++y)
     std::memcpy(cur_left_.row(y), left.row(y), static_cast<std::size_t>(left.width));
-  done("stereo_match");
+  if (roi_mode) done("stereo_match");
 
   matches_.clear();
   if (has_prev_) {

@@ -28,45 +28,15 @@
 #include "core/image.hpp"
 #include "core/stage_observer.hpp"
 #include "core/status.hpp"
-#include "features/corner_detector.hpp"
 #include "features/feature_clusters.hpp"
-#include "features/orb_extractor.hpp"
 #include "features/stereo_point_matcher.hpp"
 #include "features/temporal_matcher.hpp"
 #include "motion/visual_motion.hpp"
-#include "stereo/dense_stereo.hpp"
+#include "odometry/odometry_params.hpp"
+#include "odometry/stereo_stage.hpp"
 #include "stereo/reprojection.hpp"
 
 namespace svslam {
-
-enum class PointDetector { kCorners, kOrb };
-
-struct StereoOdometryParams {
-  PointDetector detector = PointDetector::kCorners;  // corners: precise Harris / Shi-Tomasi
-                                                     // (corners.response); orb: seed 002 ORB
-  CornerParams corners;
-  OrbParams orb;
-  StereoMatchParams stereo_match;
-  TemporalMatchParams temporal_match;
-  VisualMotionParams motion;
-  // Clustered-feature ROI tracking (seed 004 sec 3.6): the previous frame's 3D points are
-  // clustered; the clusters, moved by the predicted motion, give left ROIs (where points are
-  // kept and temporally matched to their cluster's members only) and right ROIs (which bound the
-  // stereo disparity search); image cells outside every ROI are unknown and keep corners down
-  // to threshold_rel * unknown_threshold_factor (the detector runs at that lowered threshold,
-  // corners inside ROIs must still reach threshold_rel).
-  bool roi_tracking = false;
-  FeatureClusterParams clusters;
-  double unknown_threshold_factor = 0.25;  // (0, 1]
-  bool dense = false;  // dense stereo for the prior and the 8-neighbour observation
-  DenseStereoParams dense_stereo;
-  double match_sigma_px = 0.5;  // matching error between consecutive frames, px (seed: 0.5)
-  double min_disparity_px = 1.0;  // points with a smaller disparity are not used, px, > 0
-  double max_depth_m = 1e9;       // points farther than this are not used, m, > 0
-  int min_matches = 12;           // temporal matches needed before a retry, >= 3
-  float lost_search_radius_px = 100.0f;  // search radius of the retry, px, > 0
-  Status validate() const;
-};
 
 struct OdometryFrameResult {
   int frame = 0;
@@ -105,6 +75,13 @@ class StereoOdometry {
   // updates the pose; the frame becomes the previous one at the next frontEnd().
   Status frontEnd(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                   OdometryFrameResult& out, Executor& executor, StageObserver* observer = nullptr);
+  // frontEnd() with the stereo stage already run on this pair by the caller (a pipeline
+  // thread ahead of this one) through a StereoStage built from the same parameters: `stereo`
+  // must stay alive and unchanged until the next frontEnd(). In ROI mode (stereo.matched
+  // false) detection and matching are done here. Same results as frontEnd(left, right, ...).
+  Status frontEnd(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                  const StereoStageOutput& stereo, OdometryFrameResult& out, Executor& executor,
+                  StageObserver* observer = nullptr);
   Status estimateMotion(const std::vector<std::uint8_t>* exclude, OdometryFrameResult& out,
                         StageObserver* observer = nullptr);
   // After frontEnd() (until the next one): this frame's points, the previous frame's points,
@@ -119,31 +96,28 @@ class StereoOdometry {
   // triangulation Jacobian with sigma_uv = matching_error_px. False when not observable.
   bool observe(const TrackPoint& p, double matching_error_px, StereoPoint& out) const;
   const StereoCalibration& calibration() const { return calib_; }
-  const DisparityResult* denseDisparity() const { return dense_ ? &disparity_ : nullptr; }
+  const DisparityResult* denseDisparity() const {
+    return disp_;
+  }
 
   // Forgets the previous frame: the next frame starts a new segment at the current pose.
   void resetTracking();
 
  private:
-  void buildPoints();  // cur_ from stereo_
+  void buildPoints();  // cur_ from in_->stereo
   // ROI tracking: filters corner_px_ and fills ranges_ / regions_ from the previous clusters.
   void applyRois(OdometryFrameResult& out);
 
   StereoOdometryParams params_;
   StereoCalibration calib_;
   Status init_status_;
-  CornerDetector detector_;
-  std::unique_ptr<OrbExtractor> orb_;
-  std::vector<OrbKeypoint> orb_kp_;
-  std::vector<OrbDescriptor> orb_desc_;
-  StereoPointMatcher stereo_matcher_;
+  StereoStage stage_;            // this object's own stereo stage
+  StereoStageOutput own_;        // its output (whole frame, or ROI-mode detection + matching)
+  const StereoStageOutput* in_ = nullptr;  // the current frame's stereo matches (own_ or the
+                                           // caller's), valid until the next frontEnd()
+  const DisparityResult* disp_ = nullptr;  // the current frame's dense disparity, if any
   TemporalMatcher temporal_matcher_;
   VisualMotion motion_;
-  std::unique_ptr<DenseStereo> dense_;
-  DisparityResult disparity_;
-  std::vector<Corner> corners_;
-  std::vector<Eigen::Vector2f> corner_px_;
-  std::vector<float> corner_resp_;
   std::unique_ptr<FeatureClusters> clusterer_;
   std::vector<Cluster> prev_clusters_, cur_clusters_;
   RoiSet roi_;
@@ -152,7 +126,6 @@ class StereoOdometry {
   std::vector<Eigen::Vector3d> cluster_pts_;
   std::vector<float> cluster_quality_;
   bool have_rois_ = false;
-  std::vector<StereoMatch> stereo_;
   std::vector<TrackPoint> prev_, cur_;
   std::vector<TemporalMatch> matches_;
   std::vector<PointPair> pairs_;

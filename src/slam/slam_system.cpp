@@ -345,6 +345,21 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left,
   if (!init_status_) return init_status_;
   out = SlamFrameResult{};
   if (Status s = vo_.frontEnd(left, right, out.odometry, executor, observer); !s) return s;
+  return afterFrontEnd(left, right, out, observer);
+}
+
+Status SlamSystem::process(ImageView<const std::uint8_t> left,
+                           ImageView<const std::uint8_t> right, const StereoStageOutput& stereo,
+                           SlamFrameResult& out, Executor& executor, StageObserver* observer) {
+  if (!init_status_) return init_status_;
+  out = SlamFrameResult{};
+  if (Status s = vo_.frontEnd(left, right, stereo, out.odometry, executor, observer); !s) return s;
+  return afterFrontEnd(left, right, out, observer);
+}
+
+Status SlamSystem::afterFrontEnd(ImageView<const std::uint8_t> left,
+                                 ImageView<const std::uint8_t> right, SlamFrameResult& out,
+                                 StageObserver* observer) {
   if (frame_ == 0) {
     prev_tracks_.clear();
     prev_landmark_uv_.clear();

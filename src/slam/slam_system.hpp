@@ -98,6 +98,11 @@ class SlamSystem {
   // `observer` hears the odometry's stages and "ekf" (prediction, observation, selection).
   Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                  SlamFrameResult& out, Executor& executor, StageObserver* observer = nullptr);
+  // The same with the stereo stage already run on this pair by the caller (see
+  // StereoOdometry::frontEnd with a StereoStageOutput): same results.
+  Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                 const StereoStageOutput& stereo, SlamFrameResult& out, Executor& executor,
+                 StageObserver* observer = nullptr);
 
   // Every landmark ever initialised: in the state (current estimate) or retired.
   std::vector<MapLandmark> map() const;
@@ -106,6 +111,9 @@ class SlamSystem {
   // Whether (u, v) lies within landmark_exclusion_px of one of `landmarks_uv` (px).
   bool nearLandmark(const std::vector<Eigen::Vector2f>& landmarks_uv, float u, float v) const;
   void passTracks();
+  // process() after the front end.
+  Status afterFrontEnd(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                       SlamFrameResult& out, StageObserver* observer);
   // Searches the landmarks of the state in the current pair; fills obs_ / obs_uv_.
   void searchLandmarks(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                        SlamFrameResult& out);

@@ -1,0 +1,44 @@
+#pragma once
+// Parameters of the stereo visual odometry (odometry/stereo_odometry.hpp) and of its per-frame
+// stereo stage (odometry/stereo_stage.hpp).
+#include "core/status.hpp"
+#include "features/corner_detector.hpp"
+#include "features/feature_clusters.hpp"
+#include "features/orb_extractor.hpp"
+#include "features/stereo_point_matcher.hpp"
+#include "features/temporal_matcher.hpp"
+#include "motion/visual_motion.hpp"
+#include "stereo/dense_stereo.hpp"
+
+namespace svslam {
+
+enum class PointDetector { kCorners, kOrb };
+
+struct StereoOdometryParams {
+  PointDetector detector = PointDetector::kCorners;  // corners: precise Harris / Shi-Tomasi
+                                                     // (corners.response); orb: seed 002 ORB
+  CornerParams corners;
+  OrbParams orb;
+  StereoMatchParams stereo_match;
+  TemporalMatchParams temporal_match;
+  VisualMotionParams motion;
+  // Clustered-feature ROI tracking (seed 004 sec 3.6): the previous frame's 3D points are
+  // clustered; the clusters, moved by the predicted motion, give left ROIs (where points are
+  // kept and temporally matched to their cluster's members only) and right ROIs (which bound the
+  // stereo disparity search); image cells outside every ROI are unknown and keep corners down
+  // to threshold_rel * unknown_threshold_factor (the detector runs at that lowered threshold,
+  // corners inside ROIs must still reach threshold_rel).
+  bool roi_tracking = false;
+  FeatureClusterParams clusters;
+  double unknown_threshold_factor = 0.25;  // (0, 1]
+  bool dense = false;  // dense stereo for the prior and the 8-neighbour observation
+  DenseStereoParams dense_stereo;
+  double match_sigma_px = 0.5;  // matching error between consecutive frames, px (seed: 0.5)
+  double min_disparity_px = 1.0;  // points with a smaller disparity are not used, px, > 0
+  double max_depth_m = 1e9;       // points farther than this are not used, m, > 0
+  int min_matches = 12;           // temporal matches needed before a retry, >= 3
+  float lost_search_radius_px = 100.0f;  // search radius of the retry, px, > 0
+  Status validate() const;
+};
+
+}  // namespace svslam
