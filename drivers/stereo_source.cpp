@@ -2,6 +2,8 @@
 #include "drivers/stereo_source.hpp"
 
 #include "drivers/lcm_source.hpp"
+#include "drivers/libcamera_source.hpp"
+#include "drivers/v4l2_source.hpp"
 
 namespace svslam::io {
 
@@ -12,6 +14,13 @@ Result<std::unique_ptr<StereoSource>> openStereoSource(const std::string& spec) 
   if (kind == "kitti") return openKittiSource(arg);
   if (kind == "euroc") return openEurocSource(arg);
   if (kind == "lcm") return openLcmSource(arg);
+  if (kind == "v4l2") return openV4l2Source(arg);
+#ifdef SVSLAM_HAVE_LIBCAMERA
+  if (kind == "libcamera") return openLibcameraSource(arg);
+#else
+  if (kind == "libcamera")
+    return Status::failedPrecondition("libcamera support not built (libcamera-dev not found)");
+#endif
 #ifdef SVSLAM_HAVE_SYNTHETIC_SOURCE
   if (kind == "synthetic") return openSyntheticSource(arg);
 #endif
