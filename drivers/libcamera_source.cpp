@@ -1,13 +1,13 @@
 // libcamera: stereo source (see libcamera_source.hpp). Only compiled with SVSLAM_HAVE_LIBCAMERA.
 #include "drivers/libcamera_source.hpp"
 
+#include <libcamera/libcamera.h>
 #include <sys/mman.h>
 
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <deque>
-#include <libcamera/libcamera.h>
 #include <map>
 #include <mutex>
 
@@ -59,8 +59,10 @@ class LcCamera {
                                      std::to_string(width) + "x" + std::to_string(height) +
                                      ", granted " + sc.size.toString() + " " +
                                      sc.pixelFormat.toString());
-    if (sc.pixelFormat == lc::formats::YUYV) format_ = PixelFormat::kYuyv;
-    else if (sc.pixelFormat == lc::formats::MJPEG) format_ = PixelFormat::kMjpeg;
+    if (sc.pixelFormat == lc::formats::YUYV)
+      format_ = PixelFormat::kYuyv;
+    else if (sc.pixelFormat == lc::formats::MJPEG)
+      format_ = PixelFormat::kMjpeg;
     else if (sc.pixelFormat != lc::formats::R8 && sc.pixelFormat != lc::formats::YUV420 &&
              sc.pixelFormat != lc::formats::NV12)
       return Status::invalidArgument("libcamera: camera '" + id + "' granted pixel format " +
@@ -154,8 +156,7 @@ class LcCamera {
 
 class LibcameraStereoSource final : public StereoSource {
  public:
-  LibcameraStereoSource(std::unique_ptr<lc::CameraManager> manager, TimeNs sync_ns,
-                        int timeout_ms)
+  LibcameraStereoSource(std::unique_ptr<lc::CameraManager> manager, TimeNs sync_ns, int timeout_ms)
       : manager_(std::move(manager)), pairer_(sync_ns), timeout_ms_(timeout_ms) {}
   ~LibcameraStereoSource() override {
     cams_[0].reset();
@@ -213,17 +214,19 @@ Result<std::unique_ptr<StereoSource>> openLibcameraSource(const std::string& spe
     if (o.count("timeout_ms")) timeout_ms = std::stoi(o.at("timeout_ms"));
     if (o.count("sync_ms")) sync_ms = std::stod(o.at("sync_ms"));
   } catch (const std::exception&) {
-    return Status::invalidArgument("libcamera: width, height, timeout_ms and sync_ms must be "
-                                   "numbers");
+    return Status::invalidArgument(
+        "libcamera: width, height, timeout_ms and sync_ms must be "
+        "numbers");
   }
   if (width < 2 || height < 2 || width > 16384 || height > 16384 || timeout_ms < 1 ||
       !(sync_ms >= 0.0 && sync_ms <= 1000.0))
-    return Status::invalidArgument("libcamera: width/height in [2, 16384], timeout_ms >= 1, "
-                                   "sync_ms in [0, 1000]");
+    return Status::invalidArgument(
+        "libcamera: width/height in [2, 16384], timeout_ms >= 1, "
+        "sync_ms in [0, 1000]");
   auto manager = std::make_unique<lc::CameraManager>();
   if (int err = manager->start(); err < 0)
-    return Status::ioError("libcamera: camera manager did not start (error " +
-                           std::to_string(err) + ")");
+    return Status::ioError("libcamera: camera manager did not start (error " + std::to_string(err) +
+                           ")");
   std::shared_ptr<lc::Camera> cams[2];
   for (int i = 0; i < 2; ++i) {
     cams[i] = manager->get(spec->devices[static_cast<std::size_t>(i)]);
@@ -251,8 +254,7 @@ Result<std::unique_ptr<StereoSource>> openLibcameraSource(const std::string& spe
     return rect.status();
   }
   auto source = std::make_unique<LibcameraStereoSource>(
-      std::move(manager), static_cast<TimeNs>(sync_ms * static_cast<double>(kNsPerMs)),
-      timeout_ms);
+      std::move(manager), static_cast<TimeNs>(sync_ms * static_cast<double>(kNsPerMs)), timeout_ms);
   if (Status s = source->init(cams, width, height, std::move(rect).value()); !s) return s;
   return std::unique_ptr<StereoSource>(std::move(source));
 }

@@ -18,18 +18,24 @@ Result<PixelFormat> parsePixelFormat(const std::string& name) {
 
 const char* pixelFormatName(PixelFormat format) {
   switch (format) {
-    case PixelFormat::kGrey: return "GREY";
-    case PixelFormat::kYuyv: return "YUYV";
-    case PixelFormat::kMjpeg: return "MJPEG";
+    case PixelFormat::kGrey:
+      return "GREY";
+    case PixelFormat::kYuyv:
+      return "YUYV";
+    case PixelFormat::kMjpeg:
+      return "MJPEG";
   }
   return "?";
 }
 
 std::uint32_t pixelFormatFourcc(PixelFormat format) {
   switch (format) {
-    case PixelFormat::kGrey: return V4L2_PIX_FMT_GREY;
-    case PixelFormat::kYuyv: return V4L2_PIX_FMT_YUYV;
-    case PixelFormat::kMjpeg: return V4L2_PIX_FMT_MJPEG;
+    case PixelFormat::kGrey:
+      return V4L2_PIX_FMT_GREY;
+    case PixelFormat::kYuyv:
+      return V4L2_PIX_FMT_YUYV;
+    case PixelFormat::kMjpeg:
+      return V4L2_PIX_FMT_MJPEG;
   }
   return 0;
 }
@@ -52,9 +58,12 @@ std::string fourccToString(std::uint32_t fourcc) {
 std::size_t minBytesPerLine(PixelFormat format, int width) {
   const auto w = static_cast<std::size_t>(width);
   switch (format) {
-    case PixelFormat::kGrey: return w;
-    case PixelFormat::kYuyv: return 2 * w;
-    case PixelFormat::kMjpeg: return 0;
+    case PixelFormat::kGrey:
+      return w;
+    case PixelFormat::kYuyv:
+      return 2 * w;
+    case PixelFormat::kMjpeg:
+      return 0;
   }
   return 0;
 }
@@ -104,17 +113,15 @@ Status convertToGrey(PixelFormat format, const std::uint8_t* data, std::size_t b
   const std::size_t min_line = minBytesPerLine(format, width);
   if (bytes_per_line == 0) bytes_per_line = min_line;
   if (bytes_per_line < min_line)
-    return Status::invalidArgument(std::string(pixelFormatName(format)) + " bytes per line " +
-                                   std::to_string(bytes_per_line) + " < " +
-                                   std::to_string(min_line) + " for width " +
-                                   std::to_string(width));
+    return Status::invalidArgument(
+        std::string(pixelFormatName(format)) + " bytes per line " + std::to_string(bytes_per_line) +
+        " < " + std::to_string(min_line) + " for width " + std::to_string(width));
   // The last row need only hold its pixels, not the full stride.
   const std::size_t needed = bytes_per_line * static_cast<std::size_t>(height - 1) + min_line;
   if (bytes_used < needed)
     return Status::corruptData(std::string(pixelFormatName(format)) + " buffer truncated: " +
                                std::to_string(bytes_used) + " bytes, " + std::to_string(width) +
-                               "x" + std::to_string(height) + " needs " +
-                               std::to_string(needed));
+                               "x" + std::to_string(height) + " needs " + std::to_string(needed));
   grey_out.resize(width, height);
   for (int y = 0; y < height; ++y) {
     const std::uint8_t* src = data + bytes_per_line * static_cast<std::size_t>(y);

@@ -42,11 +42,9 @@ Status V4l2CaptureParams::validate() const {
   if (buffers < 2 || buffers > 32)
     return Status::invalidArgument("v4l2 capture " + device + ": buffers must be in [2, 32]");
   if (timeout_ms < 1 || timeout_ms > 60000)
-    return Status::invalidArgument("v4l2 capture " + device +
-                                   ": timeout_ms must be in [1, 60000]");
+    return Status::invalidArgument("v4l2 capture " + device + ": timeout_ms must be in [1, 60000]");
   if (max_retries < 0 || max_retries > 1000)
-    return Status::invalidArgument("v4l2 capture " + device +
-                                   ": max_retries must be in [0, 1000]");
+    return Status::invalidArgument("v4l2 capture " + device + ": max_retries must be in [0, 1000]");
   return Status::ok();
 }
 
@@ -122,12 +120,15 @@ Status V4l2Capture::negotiateFormat() {
   fmt.fmt.pix.field = V4L2_FIELD_NONE;
   if (dev_.ioctl(fd_, VIDIOC_S_FMT, &fmt) < 0) return fail("VIDIOC_S_FMT", errno);
   const v4l2_pix_format& pix = fmt.fmt.pix;
-  if (pix.width != static_cast<std::uint32_t>(params_.width) || pix.height != static_cast<std::uint32_t>(params_.height) ||
+  if (pix.width != static_cast<std::uint32_t>(params_.width) ||
+      pix.height != static_cast<std::uint32_t>(params_.height) ||
       pix.pixelformat != pixelFormatFourcc(format_))
     return Status::invalidArgument(
-        params_.device + ": asked for " + sizeText(static_cast<std::uint32_t>(params_.width), static_cast<std::uint32_t>(params_.height)) + " " +
-        pixelFormatName(format_) + ", driver granted " + sizeText(pix.width, pix.height) + " " +
-        fourccToString(pix.pixelformat) + " (list modes with v4l2-ctl --list-formats-ext)");
+        params_.device + ": asked for " +
+        sizeText(static_cast<std::uint32_t>(params_.width),
+                 static_cast<std::uint32_t>(params_.height)) +
+        " " + pixelFormatName(format_) + ", driver granted " + sizeText(pix.width, pix.height) +
+        " " + fourccToString(pix.pixelformat) + " (list modes with v4l2-ctl --list-formats-ext)");
   bytes_per_line_ = pix.bytesperline;
   if (format_ != PixelFormat::kMjpeg && bytes_per_line_ < minBytesPerLine(format_, params_.width))
     bytes_per_line_ = minBytesPerLine(format_, params_.width);
@@ -193,8 +194,7 @@ Status V4l2Capture::dropBuffer(const std::string& why) {
   return Status::ok();
 }
 
-Result<bool> V4l2Capture::grab(ImageU8& grey_out, TimeNs& t_ns_out,
-                               std::uint32_t& sequence_out) {
+Result<bool> V4l2Capture::grab(ImageU8& grey_out, TimeNs& t_ns_out, std::uint32_t& sequence_out) {
   if (!streaming_ || unplugged_) return false;
   int eagain_in_row = 0;
   auto failed = [](Status s) -> Result<bool> { return s; };
@@ -244,10 +244,10 @@ Result<bool> V4l2Capture::grab(ImageU8& grey_out, TimeNs& t_ns_out,
       bad = "buffer flagged V4L2_BUF_FLAG_ERROR";
     } else {
       const std::size_t used = buf.bytesused > 0 ? buf.bytesused : buffers_[buf.index].length;
-      const Status c = convertToGrey(format_, static_cast<const std::uint8_t*>(
-                                                  buffers_[buf.index].start),
-                                     std::min(used, buffers_[buf.index].length), params_.width,
-                                     params_.height, bytes_per_line_, grey_out);
+      const Status c =
+          convertToGrey(format_, static_cast<const std::uint8_t*>(buffers_[buf.index].start),
+                        std::min(used, buffers_[buf.index].length), params_.width, params_.height,
+                        bytes_per_line_, grey_out);
       if (!c) bad = c.message();
     }
     if (bad.empty()) {

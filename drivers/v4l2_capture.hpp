@@ -31,14 +31,14 @@
 namespace svslam::io {
 
 struct V4l2CaptureParams {
-  std::string device;      // device node, e.g. "/dev/video0"
-  int width = 640;         // requested frame width, px, [1, 16384]
-  int height = 480;        // requested frame height, px, [1, 16384]
-  double fps = 30.0;       // requested frame rate, Hz, [0, 1000]; 0 = leave the driver's
+  std::string device;           // device node, e.g. "/dev/video0"
+  int width = 640;              // requested frame width, px, [1, 16384]
+  int height = 480;             // requested frame height, px, [1, 16384]
+  double fps = 30.0;            // requested frame rate, Hz, [0, 1000]; 0 = leave the driver's
   std::string format = "GREY";  // "GREY", "YUYV" or "MJPEG"
-  int buffers = 4;         // mmap buffers requested, [2, 32]
-  int timeout_ms = 1000;   // longest wait for one frame, ms, [1, 60000]
-  int max_retries = 3;     // errored buffers tolerated in a row, [0, 1000]
+  int buffers = 4;              // mmap buffers requested, [2, 32]
+  int timeout_ms = 1000;        // longest wait for one frame, ms, [1, 60000]
+  int max_retries = 3;          // errored buffers tolerated in a row, [0, 1000]
   Status validate() const;
 };
 

@@ -17,8 +17,7 @@ class V4l2Device {
   virtual int open(const std::string& path, int flags) = 0;
   virtual int close(int fd) = 0;
   virtual int ioctl(int fd, unsigned long request, void* arg) = 0;
-  virtual void* mmap(void* addr, std::size_t length, int prot, int flags, int fd,
-                     off_t offset) = 0;
+  virtual void* mmap(void* addr, std::size_t length, int prot, int flags, int fd, off_t offset) = 0;
   virtual int munmap(void* addr, std::size_t length) = 0;
   virtual int poll(struct pollfd* fds, nfds_t nfds, int timeout_ms) = 0;
 };

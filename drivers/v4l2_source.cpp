@@ -51,8 +51,8 @@ Result<cv::Mat> readMatrix(const cv::FileStorage& fs, const std::string& key,
   const cv::FileNode node = fs[key];
   if (node.empty()) return Status::corruptData(file + ": missing calibration key '" + key + "'");
   node >> m;
-  if (m.empty() && !(key[0] == 'D')) return Status::corruptData(file + ": key '" + key +
-                                                                "' is not a matrix");
+  if (m.empty() && !(key[0] == 'D'))
+    return Status::corruptData(file + ": key '" + key + "' is not a matrix");
   if (!m.empty()) m.convertTo(m, CV_64F);
   if (rows > 0 && (m.rows * m.cols != rows * cols))
     return Status::corruptData(file + ": key '" + key + "' must have " +
@@ -92,9 +92,8 @@ Status StereoRectification::apply(const ImageU8& raw_left, const ImageU8& raw_ri
                                   StereoFrame& out) const {
   for (const ImageU8* raw : {&raw_left, &raw_right})
     if (raw->width() != calib.width || raw->height() != calib.height)
-      return Status::invalidArgument("rectification: raw view is " +
-                                     std::to_string(raw->width()) + "x" +
-                                     std::to_string(raw->height()) + ", calibration is for " +
+      return Status::invalidArgument("rectification: raw view is " + std::to_string(raw->width()) +
+                                     "x" + std::to_string(raw->height()) + ", calibration is for " +
                                      std::to_string(calib.width) + "x" +
                                      std::to_string(calib.height));
   out.left.resize(calib.width, calib.height);
@@ -143,8 +142,7 @@ Result<StereoRectification> loadStereoRectification(const std::string& file, int
     cv::stereoRectify(K[0], D[0], K[1], D[1], sz, *R, *T, R1, R2, P1, P2, Q,
                       cv::CALIB_ZERO_DISPARITY, 0.0);
     StereoRectification rect;
-    cv::initUndistortRectifyMap(K[0], D[0], R1, P1, sz, CV_16SC2, rect.map_left_x,
-                                rect.map_left_y);
+    cv::initUndistortRectifyMap(K[0], D[0], R1, P1, sz, CV_16SC2, rect.map_left_x, rect.map_left_y);
     cv::initUndistortRectifyMap(K[1], D[1], R2, P2, sz, CV_16SC2, rect.map_right_x,
                                 rect.map_right_y);
     rect.calib.f_px = P1.at<double>(0, 0);
@@ -154,8 +152,8 @@ Result<StereoRectification> loadStereoRectification(const std::string& file, int
     rect.calib.width = width;
     rect.calib.height = height;
     if (Status s = rect.calib.validate(); !s)
-      return Status(s.code(), file + ": rectified " + s.message() +
-                                  " (is T in metres, right camera at +x?)");
+      return Status(s.code(),
+                    file + ": rectified " + s.message() + " (is T in metres, right camera at +x?)");
     return rect;
   } catch (const cv::Exception& e) {
     return Status::corruptData(file + ": cannot read calibration: " + e.what());
@@ -217,9 +215,9 @@ Result<bool> V4l2StereoSource::next(StereoFrame& out) {
 
 Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix,
                                                      V4l2Device& device) {
-  auto spec = parseCameraSpec(spec_after_prefix, "v4l2",
-                              {"width", "height", "fps", "format", "calib", "sync_ms", "layout",
-                               "buffers", "timeout_ms"});
+  auto spec = parseCameraSpec(
+      spec_after_prefix, "v4l2",
+      {"width", "height", "fps", "format", "calib", "sync_ms", "layout", "buffers", "timeout_ms"});
   if (!spec) return spec.status();
   V4l2CaptureParams p;
   auto width = integer(*spec, "width", p.width, "v4l2");
@@ -240,9 +238,10 @@ Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_aft
   const std::size_t want = sbs ? 1 : 2;
   if (spec->devices.size() != want)
     return Status::invalidArgument(
-        "v4l2: " + std::string(sbs ? "layout=side-by-side takes one device"
-                                   : "two devices needed (DEV_LEFT,DEV_RIGHT) unless "
-                                     "layout=side-by-side") +
+        "v4l2: " +
+        std::string(sbs ? "layout=side-by-side takes one device"
+                        : "two devices needed (DEV_LEFT,DEV_RIGHT) unless "
+                          "layout=side-by-side") +
         ", got " + std::to_string(spec->devices.size()));
   if (!(*sync_ms >= 0.0 && *sync_ms <= 1000.0))
     return Status::invalidArgument("v4l2: sync_ms must be in [0, 1000]");

@@ -49,8 +49,7 @@ struct StereoRectification {
   Status apply(const ImageU8& raw_left, const ImageU8& raw_right, StereoFrame& out) const;
 };
 // Reads `file` (format above); width/height = the capture size of one view, px.
-Result<StereoRectification> loadStereoRectification(const std::string& file, int width,
-                                                    int height);
+Result<StereoRectification> loadStereoRectification(const std::string& file, int width, int height);
 
 // Pairs the frames of two free-running cameras by timestamp (see top).
 class TimestampPairer {
@@ -76,8 +75,8 @@ class TimestampPairer {
 class V4l2StereoSource final : public StereoSource {
  public:
   // One capture = side-by-side, two = left and right cameras; all already open.
-  V4l2StereoSource(std::vector<std::unique_ptr<V4l2Capture>> captures,
-                   StereoRectification rect, TimeNs sync_tolerance_ns);
+  V4l2StereoSource(std::vector<std::unique_ptr<V4l2Capture>> captures, StereoRectification rect,
+                   TimeNs sync_tolerance_ns);
   const StereoCalibration& calibration() const override { return rect_.calib; }
   int size() const override { return -1; }
   Result<bool> next(StereoFrame& out) override;

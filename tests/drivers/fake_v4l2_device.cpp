@@ -79,9 +79,11 @@ void FakeV4l2Device::fill(Camera& cam, std::uint32_t index, std::uint32_t sequen
     std::vector<std::uint8_t> jpg;
     cv::Mat m(h, w, CV_8U);
     for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) m.at<std::uint8_t>(y, x) = frame(x % frame.width(), y % frame.height());
+      for (int x = 0; x < w; ++x)
+        m.at<std::uint8_t>(y, x) = frame(x % frame.width(), y % frame.height());
     cv::imencode(".jpg", m, jpg, {cv::IMWRITE_JPEG_QUALITY, 98});
-    std::copy(jpg.begin(), std::min(jpg.end(), jpg.begin() + static_cast<std::ptrdiff_t>(buf.size())),
+    std::copy(jpg.begin(),
+              std::min(jpg.end(), jpg.begin() + static_cast<std::ptrdiff_t>(buf.size())),
               buf.begin());
     bytes_used = static_cast<std::uint32_t>(std::min(jpg.size(), buf.size()));
     return;
@@ -111,9 +113,13 @@ int FakeV4l2Device::dqbuf(Camera& cam, void* arg) {
   const FakeEvent ev = cam.config.script.front();
   cam.config.script.pop_front();
   switch (ev.kind) {
-    case FakeEvent::Kind::kEagain: return fail(EAGAIN);
-    case FakeEvent::Kind::kEnodev: cam.unplugged = true; return fail(ENODEV);
-    default: break;
+    case FakeEvent::Kind::kEagain:
+      return fail(EAGAIN);
+    case FakeEvent::Kind::kEnodev:
+      cam.unplugged = true;
+      return fail(ENODEV);
+    default:
+      break;
   }
   if (cam.queue.empty()) {
     ++starved_;
@@ -123,8 +129,8 @@ int FakeV4l2Device::dqbuf(Camera& cam, void* arg) {
   cam.queue.pop_front();
   ++cam.dequeued;
   b->index = index;
-  b->flags = cam.config.monotonic ? V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC
-                                  : V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN;
+  b->flags =
+      cam.config.monotonic ? V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC : V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN;
   b->field = V4L2_FIELD_NONE;
   b->sequence = ev.sequence;
   b->timestamp.tv_sec = static_cast<time_t>(ev.t_ns / kNsPerS);
@@ -212,7 +218,8 @@ int FakeV4l2Device::ioctl(int fd, unsigned long request, void* arg) {
       b->m.offset = static_cast<std::uint32_t>(b->index * kOffsetStep);
       return 0;
     }
-    case VIDIOC_DQBUF: return dqbuf(*cam, arg);
+    case VIDIOC_DQBUF:
+      return dqbuf(*cam, arg);
     case VIDIOC_STREAMON:
       if (cam->buffers.empty()) return fail(EINVAL);
       cam->streaming = true;
@@ -221,7 +228,8 @@ int FakeV4l2Device::ioctl(int fd, unsigned long request, void* arg) {
       cam->streaming = false;
       cam->queue.clear();
       return 0;
-    default: return fail(ENOTTY);
+    default:
+      return fail(ENOTTY);
   }
 }
 

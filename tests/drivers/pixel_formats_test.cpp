@@ -118,7 +118,8 @@ TEST(PixelFormats, NamesAndFourcc) {
   EXPECT_EQ(parsePixelFormat("MJPG").value(), PixelFormat::kMjpeg);
   EXPECT_FALSE(parsePixelFormat("RGB3"));
   EXPECT_EQ(fourccToString(pixelFormatFourcc(PixelFormat::kMjpeg)), "MJPG");
-  EXPECT_EQ(pixelFormatFromFourcc(pixelFormatFourcc(PixelFormat::kGrey)).value(), PixelFormat::kGrey);
+  EXPECT_EQ(pixelFormatFromFourcc(pixelFormatFourcc(PixelFormat::kGrey)).value(),
+            PixelFormat::kGrey);
 }
 
 }  // namespace

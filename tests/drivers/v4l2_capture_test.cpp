@@ -100,11 +100,11 @@ INSTANTIATE_TEST_SUITE_P(AllFormats, CaptureFormats, ::testing::Values("GREY", "
 
 TEST(V4l2Capture, RecoversFromEagainAndDropsErroredBuffers) {
   FakeV4l2Device dev;
-  dev.addCamera(kDev, camera({FakeEvent::frame(1000, 0), FakeEvent::eagain(), FakeEvent::eagain(),
-                              FakeEvent::frame(2000, 1), FakeEvent::eio(),
-                              FakeEvent::errorFlag(3000, 2), FakeEvent::frame(4000, 3),
-                              FakeEvent::frame(5000, 4), FakeEvent::frame(6000, 5),
-                              FakeEvent::frame(7000, 6)}));
+  dev.addCamera(
+      kDev, camera({FakeEvent::frame(1000, 0), FakeEvent::eagain(), FakeEvent::eagain(),
+                    FakeEvent::frame(2000, 1), FakeEvent::eio(), FakeEvent::errorFlag(3000, 2),
+                    FakeEvent::frame(4000, 3), FakeEvent::frame(5000, 4), FakeEvent::frame(6000, 5),
+                    FakeEvent::frame(7000, 6)}));
   V4l2Capture cap(dev, params());
   ASSERT_TRUE(cap.open());
   ImageU8 img;
