@@ -1,282 +1,250 @@
-// svslam run: stereo visual odometry over a sequence, writing trajectories and stats.
-#include <algorithm>
-#include <chrono>
+// svslam run: the real-time pipeline over a source (recorded or live), writing trajectories,
+// covariances, the map and stats, publishing on LCM, under systemd when started as a service.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <map>
 #include <memory>
 #include <string>
 #include <system_error>
 #include <vector>
 
+#include "drivers/lcm_transport.hpp"
+#include "drivers/preloaded_source.hpp"
 #include "drivers/stereo_source.hpp"
-#include "odometry/stereo_odometry.hpp"
-#include "slam/slam_system.hpp"
 #include "pipeline/cli/arg_parser.hpp"
 #include "pipeline/cli/commands.hpp"
 #include "pipeline/cli/json_writer.hpp"
 #include "pipeline/config/run_config.hpp"
+#include "pipeline/realtime/pipeline_runner.hpp"
+#include "pipeline/realtime/stage_work.hpp"
 #include "pipeline/run/run_outputs.hpp"
-#include "pipeline/thread_pool_executor.hpp"
+#include "pipeline/run/run_summary.hpp"
+#include "pipeline/service/sd_notify.hpp"
+#include "pipeline/service/stop_signal.hpp"
 
 namespace svslam::cli {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+void logLine(const std::string& msg) {
+  std::fprintf(stderr, "svslam run: %s\n", msg.c_str());
+  std::fflush(stderr);
 }
 
-// Times the stages of the odometry through the library's observer hook.
-class StageClock final : public StageObserver {
- public:
-  explicit StageClock(run::StageTimes& times) : times_(times) {}
-  void start() { last_ = Clock::now(); }
-  void stageDone(const char* stage) override {
-    const auto now = Clock::now();
-    times_.add(stage, std::chrono::duration<double, std::milli>(now - last_).count());
-    last_ = now;
-  }
-
- private:
-  run::StageTimes& times_;
-  Clock::time_point last_;
-};
-
-struct RunSummary {
-  int frames = 0;
-  int tracked = 0;
-  std::map<std::string, int> failure_counts;
-  std::vector<std::pair<int, std::string>> failures;  // first ones, frame + reason
-  double sum_corners = 0, sum_points = 0, sum_matches = 0, sum_inliers = 0;
-  double sum_recovered = 0, sum_continuity_rejected = 0;
-  // EKF mode.
-  double sum_observed = 0, sum_reperceived = 0, sum_gated = 0, sum_in_state = 0;
-  double sum_visible = 0, sum_no_match = 0, sum_no_stereo = 0;
-  int max_in_state = 0, landmarks_in_map = 0, added = 0, retired = 0;
-};
-
-std::string statsJson(const config::RunConfig& cfg, const std::string& source,
-                      const RunSummary& s, const run::StageTimes& times, const std::string& error) {
-  JsonObject fails;
-  for (const auto& [reason, n] : s.failure_counts) fails.add(reason, n);
-  std::string list = "[";
-  for (std::size_t i = 0; i < s.failures.size(); ++i) {
-    JsonObject f;
-    f.add("frame", s.failures[i].first).add("reason", s.failures[i].second);
-    list += (i ? ", " : "") + f.str();
-  }
-  list += "]";
-  const double n = std::max(1, s.frames);
-  JsonObject j;
-  j.add("source", source)
-      .add("mode", cfg.mode)
-      .add("frames", s.frames)
-      .add("frames_tracked", s.tracked)
-      .add("frames_without_pose", s.frames - s.tracked)
-      .addRaw("without_pose_reasons", fails.str())
-      .addRaw("without_pose_frames", list)
-      .add("mean_corners", s.sum_corners / n, 1)
-      .add("mean_stereo_points", s.sum_points / n, 1)
-      .add("mean_stereo_continuity_rejected", s.sum_continuity_rejected / n, 1)
-      .add("mean_stereo_recovered", s.sum_recovered / n, 1)
-      .add("mean_temporal_matches", s.sum_matches / n, 1)
-      .add("mean_motion_inliers", s.sum_inliers / n, 1)
-      .add("threads", cfg.threads)
-      .add("dense_stereo", cfg.odometry.dense)
-      .add("seed", static_cast<std::int64_t>(cfg.seed))
-      .add("front_end_median_ms", times.median("front_end"), 3);
-  if (cfg.mode == "ekf") {
-    j.add("landmarks_in_state_mean", s.sum_in_state / n, 1)
-        .add("landmarks_in_state_max", s.max_in_state)
-        .add("landmarks_in_map", s.landmarks_in_map)
-        .add("landmarks_added", s.added)
-        .add("landmarks_retired", s.retired)
-        .add("mean_landmarks_observed", s.sum_observed / n, 1)
-        .add("mean_landmarks_reperceived", s.sum_reperceived / n, 2)
-        .add("mean_observations_gated", s.sum_gated / n, 2)
-        .add("mean_landmarks_predicted_visible", s.sum_visible / n, 1)
-        .add("mean_landmark_search_no_match", s.sum_no_match / n, 2)
-        .add("mean_landmark_search_no_stereo", s.sum_no_stereo / n, 2)
-        .add("ekf_median_ms", times.median("ekf"), 3);
-  }
-  j.addRaw("stage_ms", times.json());
-  if (!error.empty()) j.add("error", error);
-  return j.str() + "\n";
-}
-
-}  // namespace
-
-int runRun(const std::vector<std::string>& args) {
-  ArgParser p("run",
-              "Runs stereo visual odometry over a sequence (as fast as possible) and writes to\n"
-              "the output folder: trajectory_kitti.txt (3x4 [R|t] per input frame, left camera\n"
-              "in the first left camera's frame), trajectory_tum.txt, stats.json (frames,\n"
-              "frames without a pose and why, per-stage time p50/p99/max in ms) and, when the\n"
-              "source knows it, groundtruth_kitti.txt. In ekf mode (default) also\n"
-              "pose_covariance.txt (6x6 per frame, row-major, [rot rad, trans m]) and\n"
-              "landmarks.ply (every landmark, position + 1-sigma radii). Prints a JSON summary.");
-  p.addOption("source", "SRC",
-              "kitti:DIR, euroc:DIR or synthetic[:key=value,...] (default: the config's "
-              "'source', else synthetic)");
-  p.addOption("config", "FILE", "YAML configuration (documented example: config/svslam.yaml)");
-  p.addOption("out", "DIR", "output folder (created if missing)", "svslam_out");
-  p.addOption("max-frames", "N", "stop after N frames (0 = all; overrides the config)");
-  p.addOption("threads", "T", "worker threads for stages that split work (overrides the config)");
-  p.addOption("mode", "ekf|vo",
-              "ekf: EKF SLAM over pose and landmarks; vo: pure visual odometry (overrides the "
-              "config; default ekf)");
-  if (auto code = parseCommandLine(p, args)) return *code;
-  auto fail = [](const Status& s) { return reportFailure("run", s); };
-
-  config::RunConfig cfg;
-  if (Status s = config::loadRunConfig(p.has("config") ? p.get("config") : "", cfg); !s)
-    return fail(s);
+// Applies the command-line overrides to the configuration.
+Status applyOverrides(const ArgParser& p, config::RunConfig& cfg) {
   if (p.has("max-frames")) {
     auto n = p.getInt("max-frames", 0, 100000000);
-    if (!n) return fail(n.status());
+    if (!n) return n.status();
     cfg.max_frames = *n;
   }
   if (p.has("threads")) {
     auto n = p.getInt("threads", 1, 256);
-    if (!n) return fail(n.status());
+    if (!n) return n.status();
     cfg.threads = *n;
     cfg.odometry.dense_stereo.num_stripes = *n;
   }
   if (p.has("mode")) {
     cfg.mode = p.get("mode");
     if (cfg.mode != "ekf" && cfg.mode != "vo")
-      return fail(Status::invalidArgument("--mode: unknown mode '" + cfg.mode + "' (use ekf or vo)"));
+      return Status::invalidArgument("--mode: unknown mode '" + cfg.mode + "' (use ekf or vo)");
   }
+  if (p.has("sequential")) cfg.pipeline.sequential = true;
+  if (p.has("preload")) cfg.pipeline.preload = true;
+  if (p.has("rate")) {
+    auto r = p.getDouble("rate");
+    if (!r) return r.status();
+    if (!(*r >= 0.0 && *r <= 10000.0))
+      return Status::invalidArgument("--rate: must be in [0, 10000] Hz (0 = as fast as possible)");
+    cfg.pipeline.rate_hz = *r;
+  }
+  if (p.has("lcm-url")) {
+    cfg.lcm.enabled = true;
+    cfg.lcm.params.url = p.get("lcm-url");
+  }
+  return Status::ok();
+}
+
+// Applies the LCM commands received since the last tick and answers each on the status channel.
+void handleCommands(io::LcmLink& lcm, rt::RunWork& work, rt::PipelineControl& control) {
+  std::vector<io::Command> cmds;
+  if (!lcm.pollCommands(0, cmds)) return;
+  for (const io::Command& c : cmds) {
+    io::CommandStatus st;
+    st.t_ns = c.t_ns;
+    st.seq = c.seq;
+    st.ok = true;
+    switch (c.kind) {
+      case io::CommandKind::kReset:
+        st.command = "reset";
+        work.requestReset();
+        st.message = "the estimator restarts at the next frame (new map, pose at identity)";
+        break;
+      case io::CommandKind::kSaveMap:
+        st.command = "save_map";
+        work.requestSaveMap(c.argument, c.seq);
+        continue;  // answered by the estimator once written
+      case io::CommandKind::kPause:
+        st.command = "pause";
+        control.pause = true;
+        st.message = "capture paused";
+        break;
+      case io::CommandKind::kResume:
+        st.command = "resume";
+        control.pause = false;
+        st.message = "capture resumed";
+        break;
+      case io::CommandKind::kShutdown:
+        st.command = "shutdown";
+        service::requestStop();
+        st.message = "stopping: draining the pipeline";
+        break;
+    }
+    logLine("command " + st.command + " (seq " + std::to_string(c.seq) + ")");
+    (void)lcm.publishCommandStatus(st);
+  }
+}
+
+}  // namespace
+
+int runRun(const std::vector<std::string>& args) {
+  ArgParser p("run",
+              "Runs the real-time pipeline (capture -> stereo -> estimator -> publisher, one\n"
+              "thread each) over a source and writes to the output folder: trajectory_kitti.txt\n"
+              "(3x4 [R|t] per frame, left camera in the first left camera's frame),\n"
+              "trajectory_tum.txt, stats.json (frames, frames without a pose and why, per-stage\n"
+              "time p50/p99/max, end-to-end latency capture -> pose published, queues, drops) and,\n"
+              "when the source knows it, groundtruth_kitti.txt. In ekf mode (default) also\n"
+              "pose_covariance.txt (6x6 per frame, row-major, [rot rad, trans m]) and\n"
+              "landmarks.ply (position + 1-sigma radii). With lcm.enabled (or --lcm-url) poses\n"
+              "with covariance, stats and the map summary go out on LCM and commands are taken.\n"
+              "SIGTERM/SIGINT stop capture, drain the frames in flight, write every output and\n"
+              "exit 0. Under systemd (Type=notify): READY=1 after the first pose, WATCHDOG=1 while\n"
+              "frames complete. Prints a JSON summary.");
+  p.addOption("source", "SRC",
+              "kitti:DIR, euroc:DIR, synthetic[:key=value,...], v4l2:..., libcamera:... or "
+              "lcm:CHANNEL (default: the config's 'source', else synthetic)");
+  p.addOption("config", "FILE", "YAML configuration (documented example: config/svslam.yaml)");
+  p.addOption("out", "DIR", "output folder (created if missing)", "svslam_out");
+  p.addOption("max-frames", "N", "stop after N frames (0 = all; overrides the config)");
+  p.addOption("threads", "T", "worker threads inside the stereo stage (overrides the config)");
+  p.addOption("mode", "ekf|vo",
+              "ekf: EKF SLAM over pose and landmarks; vo: pure visual odometry (overrides the "
+              "config; default ekf)");
+  p.addFlag("sequential", "run every stage on one thread (same outputs as the threaded run)");
+  p.addOption("rate", "HZ",
+              "replay a recorded source in real time at HZ frames per second (frames stamped as "
+              "if captured then; 0 = as fast as possible, the default)");
+  p.addFlag("preload", "read the whole recorded sequence into memory before the run");
+  p.addOption("lcm-url", "URL", "publish on LCM at URL (enables lcm; e.g. udpm://239.255.76.67:7667?ttl=0)");
+  if (auto code = parseCommandLine(p, args)) return *code;
+  auto fail = [](const Status& s) { return reportFailure("run", s); };
+
+  config::RunConfig cfg;
+  if (Status s = config::loadRunConfig(p.has("config") ? p.get("config") : "", cfg); !s)
+    return fail(s);
+  if (Status s = applyOverrides(p, cfg); !s) return fail(s);
   const std::string source_spec = p.has("source") ? p.get("source") : cfg.source;
-  auto src = io::openStereoSource(source_spec);
-  if (!src) return fail(src.status());
-  io::StereoSource& source = **src;
+  auto opened = io::openStereoSource(source_spec);
+  if (!opened) return fail(opened.status());
+  std::unique_ptr<io::StereoSource> source = std::move(*opened);
+  const bool live = source->size() < 0;
+  if (cfg.pipeline.preload && !live) {
+    logLine("reading the sequence into memory");
+    auto pre = io::preloadSource(std::move(source), cfg.max_frames);
+    if (!pre) return fail(pre.status());
+    source = std::move(*pre);
+  }
 
   const std::string out_dir = p.get("out");
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   if (ec || !std::filesystem::is_directory(out_dir))
     return fail(Status::ioError("cannot create output folder '" + out_dir + "'"));
-  const std::string stats_path = out_dir + "/stats.json";
 
-  const bool ekf_mode = cfg.mode == "ekf";
-  std::unique_ptr<StereoOdometry> vo;
-  std::unique_ptr<SlamSystem> slam;
-  if (ekf_mode) {
-    slam = std::make_unique<SlamSystem>(cfg.slam, cfg.odometry, source.calibration());
-    if (!slam->initStatus()) return fail(slam->initStatus());
-  } else {
-    vo = std::make_unique<StereoOdometry>(cfg.odometry, source.calibration());
-    if (!vo->initStatus()) return fail(vo->initStatus());
+  std::unique_ptr<io::LcmLink> lcm;
+  if (cfg.lcm.enabled) {
+    auto l = io::LcmLink::open(cfg.lcm.params);
+    if (!l) return fail(l.status());
+    lcm = std::move(*l);
   }
-  std::unique_ptr<Executor> executor;
-  if (cfg.threads > 1)
-    executor = std::make_unique<ThreadPoolExecutor>(cfg.threads);
-  else
-    executor = std::make_unique<SerialExecutor>();
+  if (Status s = service::installStopSignalHandlers(); !s) return fail(s);
 
-  run::TrajectoryWriter traj, gt;
-  if (Status s = traj.open(out_dir + "/trajectory_kitti.txt", out_dir + "/trajectory_tum.txt"); !s)
-    return fail(s);
-  Eigen::Isometry3d T_gt;
-  const bool has_gt = source.groundTruth(0, T_gt);
-  if (has_gt) {
-    if (Status s = gt.open(out_dir + "/groundtruth_kitti.txt", ""); !s) return fail(s);
-  }
-  run::LineWriter cov_file;
-  if (ekf_mode) {
-    if (Status s = cov_file.open(out_dir + "/pose_covariance.txt"); !s) return fail(s);
-  }
+  rt::RunWork work(cfg, *source, out_dir, lcm.get());
+  if (Status s = work.init(); !s) return fail(s);
 
-  run::StageTimes times;
-  StageClock clock(times);
-  RunSummary sum;
-  io::StereoFrame frame;
-  std::string error;
-  while (cfg.max_frames == 0 || sum.frames < cfg.max_frames) {
-    const auto t_load = Clock::now();
-    auto more = source.next(frame);
-    if (!more) {
-      error = more.status().message();
-      break;
-    }
-    if (!*more) break;
-    times.add("load", msSince(t_load));
-    SlamFrameResult sr;
-    OdometryFrameResult& r = sr.odometry;
-    const auto t0 = Clock::now();
-    clock.start();
-    const Status ps =
-        ekf_mode ? slam->process(frame.left.cview(), frame.right.cview(), sr, *executor, &clock)
-                 : vo->process(frame.left.cview(), frame.right.cview(), r, *executor, &clock);
-    if (!ps) {
-      error = "frame " + std::to_string(frame.index) + ": " + ps.message();
-      break;
-    }
-    times.add("front_end", msSince(t0));
-    if (ekf_mode) {
-      sum.sum_observed += sr.observed;
-      sum.sum_reperceived += sr.reperceived;
-      sum.sum_gated += sr.gated;
-      sum.sum_visible += sr.predicted_visible;
-      sum.sum_no_match += sr.search_no_match;
-      sum.sum_no_stereo += sr.search_no_stereo;
-      sum.sum_in_state += sr.landmarks_in_state;
-      sum.max_in_state = std::max(sum.max_in_state, sr.landmarks_in_state);
-      sum.landmarks_in_map = sr.landmarks_in_map;
-      sum.added += sr.added;
-      sum.retired += sr.retired;
-    }
-    ++sum.frames;
-    if (r.tracked) {
-      ++sum.tracked;
-    } else {
-      ++sum.failure_counts[r.failure];
-      if (sum.failures.size() < 100) sum.failures.emplace_back(frame.index, r.failure);
-    }
-    sum.sum_corners += r.corners;
-    sum.sum_points += r.stereo_points;
-    sum.sum_matches += r.temporal_matches;
-    sum.sum_inliers += r.inliers;
-    sum.sum_recovered += r.stereo_stats.recovered;
-    sum.sum_continuity_rejected += r.stereo_stats.continuity_rejected;
-    if (Status s = traj.append(frame.t_ns, ekf_mode ? sr.T_world_cam : r.T_first_cam); !s) {
-      error = s.message();
-      break;
-    }
-    if (ekf_mode) {
-      std::string line;
-      char num[32];
-      for (int i = 0; i < 36; ++i) {
-        std::snprintf(num, sizeof num, "%s%.9e", i ? " " : "", sr.pose_cov(i / 6, i % 6));
-        line += num;
-      }
-      if (Status s = cov_file.append(line); !s) {
-        error = s.message();
-        break;
-      }
-    }
-    if (has_gt && source.groundTruth(frame.index, T_gt)) {
-      if (Status s = gt.append(frame.t_ns, T_gt); !s) {
-        error = s.message();
-        break;
-      }
-    }
+  rt::PipelineOptions opts;
+  opts.sequential = cfg.pipeline.sequential;
+  opts.rate_hz = cfg.pipeline.rate_hz;
+  opts.queue_capacity = cfg.pipeline.queue_capacity;
+  opts.keep_newest = cfg.pipeline.capture_policy == "newest" ||
+                     (cfg.pipeline.capture_policy == "auto" && (live || opts.rate_hz > 0));
+  if (Status s = opts.validate(); !s) return fail(s);
+  std::vector<std::unique_ptr<rt::FrameSlot>> slots;
+  const StereoCalibration& calib = source->calibration();
+  for (int i = 0; i < rt::PipelineRunner::slotsNeeded(opts); ++i) {
+    auto slot = std::make_unique<rt::FrameSlot>();
+    slot->frame.left.resize(calib.width, calib.height);
+    slot->frame.right.resize(calib.width, calib.height);
+    slots.push_back(std::move(slot));
   }
-  traj.close();
-  gt.close();
-  cov_file.close();
-  if (ekf_mode) {
-    std::vector<run::PlyLandmark> ply;
-    for (const MapLandmark& m : slam->map())
-      ply.push_back({m.id, m.p_world, m.cov.diagonal().cwiseMax(0.0).cwiseSqrt(), m.active,
-                     m.observations});
-    if (Status s = run::writeLandmarksPly(out_dir + "/landmarks.ply", ply); !s && error.empty())
-      error = s.message();
+  work.setMaxFrames(cfg.max_frames);
+
+  service::ServiceNotifier notifier;
+  const std::int64_t wd_interval = notifier.watchdogIntervalNs();
+  service::HealthWatchdog watchdog(wd_interval,
+                                   static_cast<std::int64_t>(cfg.service.stall_timeout_s * 1e9));
+  rt::PipelineRunner runner(opts, work);
+  rt::PipelineControl control;
+  bool ready_sent = false, stopping_sent = false;
+  if (cfg.service.ready == "start") {
+    notifier.ready("started");
+    ready_sent = true;
   }
-  if (Status s = run::writeFileAtomic(stats_path, statsJson(cfg, source_spec, sum, times, error));
+  std::int64_t last_published = 0;
+  const std::int64_t progress_ns = static_cast<std::int64_t>(cfg.pipeline.progress_period_s * 1e9);
+  std::int64_t next_progress = rt::steadyNowNs() + progress_ns;
+  auto tick = [&] {
+    const std::int64_t now = rt::steadyNowNs();
+    if (const std::string w = work.takeWarnings(); !w.empty()) logLine("warning: " + w);
+    if (service::stopRequested() && !control.stop) {
+      control.stop = true;
+      if (!stopping_sent) {
+        notifier.stopping();
+        stopping_sent = true;
+      }
+      const int sig = service::stopSignalNumber();
+      logLine(std::string("stop requested") + (sig ? " (signal " + std::to_string(sig) + ")" : "") +
+              ": draining the frames in flight");
+    }
+    if (lcm) handleCommands(*lcm, work, control);
+    const std::int64_t published = runner.published();
+    if (published > last_published) {
+      watchdog.progress(now);
+      if (!ready_sent) {
+        notifier.ready("tracking");
+        ready_sent = true;
+      }
+      last_published = published;
+    } else if (control.pause) {
+      watchdog.idle(now);
+    }
+    if (watchdog.shouldPing(now)) notifier.watchdog();
+    if (progress_ns > 0 && now >= next_progress) {
+      logLine("progress: " + std::to_string(published) + " poses, " +
+              std::to_string(runner.captured()) + " frames captured");
+      next_progress = now + progress_ns;
+    }
+  };
+  const Status run_status = runner.run(slots, control, tick);
+  if (!stopping_sent) notifier.stopping();
+
+  std::string error = run_status ? "" : run_status.message();
+  if (Status s = work.finish(); !s && error.empty()) error = s.message();
+  const run::StageTimes times = work.stageTimes();
+  const rt::PipelineReport& rep = runner.report();
+  if (Status s = run::writeFileAtomic(out_dir + "/stats.json",
+                                      run::statsJson(cfg, source_spec, work.summary(), times, rep,
+                                                     error));
       !s)
     return fail(s);
   if (!error.empty()) return fail(Status::ioError(error));
@@ -284,8 +252,14 @@ int runRun(const std::vector<std::string>& args) {
   j.add("source", source_spec)
       .add("mode", cfg.mode)
       .add("out", out_dir)
-      .add("frames", sum.frames)
-      .add("frames_tracked", sum.tracked)
+      .add("threaded", !opts.sequential)
+      .add("frames", work.summary().frames)
+      .add("frames_tracked", work.summary().tracked)
+      .add("frames_dropped", static_cast<std::int64_t>(rep.dropped))
+      .add("stopped_by_signal", service::stopRequested())
+      .add("fps", rep.fps, 2)
+      .add("latency_p50_ms", rep.end_to_end.p50_ms, 3)
+      .add("latency_p99_ms", rep.end_to_end.p99_ms, 3)
       .add("front_end_median_ms", times.median("front_end"), 3);
   std::printf("%s\n", j.str().c_str());
   return 0;

@@ -168,6 +168,7 @@ static Status parse(ConfigReader& r, RunConfig& out) {
   SVSLAM_TRY(r.read("odometry.max_depth_m", o.max_depth_m, 0.01, 1e9));
   SVSLAM_TRY(r.read("odometry.min_matches", o.min_matches, 3, 10000));
   SVSLAM_TRY(r.read("odometry.lost_search_radius_px", o.lost_search_radius_px, 1, 4000));
+  SVSLAM_TRY(readPipelineConfig(r, out.pipeline, out.lcm, out.service));
   SVSLAM_TRY(r.finish());
   o.motion.seed = out.seed;
   o.dense_stereo.num_stripes = out.threads;

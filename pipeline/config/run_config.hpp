@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/status.hpp"
+#include "pipeline/config/pipeline_config.hpp"
 #include "odometry/stereo_odometry.hpp"
 #include "slam/slam_system.hpp"
 
@@ -19,6 +20,9 @@ struct RunConfig {
   std::string mode = "ekf";          // ekf (SLAM filter) | vo (pure visual odometry)
   StereoOdometryParams odometry;
   SlamSystemParams slam;
+  PipelineConfig pipeline;  // pipeline.*: threads, queues, pacing, scheduling
+  LcmConfig lcm;            // lcm.*: publishing and commands
+  ServiceConfig service;    // service.*: systemd life cycle
 };
 
 // Reads `path` (empty: defaults only) into `out`.

@@ -105,6 +105,15 @@ void StageTimes::add(const std::string& stage, double ms) {
   it->second.push_back(ms);
 }
 
+void StageTimes::merge(const StageTimes& other) {
+  for (const std::string& stage : other.order_) {
+    const auto& v = other.samples_.at(stage);
+    if (!samples_.count(stage)) order_.push_back(stage);
+    auto& mine = samples_[stage];
+    mine.insert(mine.end(), v.begin(), v.end());
+  }
+}
+
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return NAN;
   std::sort(v.begin(), v.end());

@@ -70,6 +70,8 @@ class StageTimes {
   // {"stage": {"p50_ms": .., "p99_ms": .., "max_ms": .., "count": n}, ...} in insertion order.
   std::string json() const;
   double median(const std::string& stage) const;  // NaN when no sample
+  // Appends the samples of `other` (stages new to this one go after its own, in order).
+  void merge(const StageTimes& other);
 
  private:
   std::vector<std::string> order_;

@@ -1,0 +1,181 @@
+// svslam listen: prints the poses (with covariance) and statistics published on LCM, one
+// JSON line each, as received by a separate process.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "drivers/lcm_transport.hpp"
+#include "pipeline/cli/arg_parser.hpp"
+#include "pipeline/cli/commands.hpp"
+#include "pipeline/cli/json_writer.hpp"
+
+namespace svslam::cli {
+namespace {
+
+std::string jsonArray(const double* v, int n, const char* fmt) {
+  std::string s = "[";
+  char buf[64];
+  for (int i = 0; i < n; ++i) {
+    if (std::isfinite(v[i])) {
+      std::snprintf(buf, sizeof buf, fmt, v[i]);
+    } else {
+      std::snprintf(buf, sizeof buf, "null");
+    }
+    s += (i ? ", " : "") + std::string(buf);
+  }
+  return s + "]";
+}
+
+const char* statusName(io::TrackingStatus s) {
+  switch (s) {
+    case io::TrackingStatus::kTracking: return "tracking";
+    case io::TrackingStatus::kLost: return "lost";
+    case io::TrackingStatus::kInitializing: return "initializing";
+  }
+  return "unknown";
+}
+
+std::string poseLine(const svslam_lcm::pose_t& m, const io::PoseReport& r) {
+  double diag[6];
+  for (int i = 0; i < 6; ++i) diag[i] = r.cov(i, i);
+  JsonObject j;
+  j.add("type", "pose")
+      .add("seq", static_cast<std::int64_t>(m.seq))
+      .add("utime", static_cast<std::int64_t>(m.utime))
+      .add("publish_utime", static_cast<std::int64_t>(m.publish_utime))
+      .add("frame_id", m.frame_id)
+      .addRaw("position", jsonArray(m.position, 3, "%.9g"))
+      .addRaw("orientation", jsonArray(m.orientation, 4, "%.9g"))
+      .addRaw("cov_diag", jsonArray(diag, 6, "%.6g"))
+      .add("status", statusName(r.status));
+  return j.str();
+}
+
+std::string statsLine(const io::StatsReport& r) {
+  std::string stages = "[";
+  for (std::size_t i = 0; i < r.stages.size(); ++i) {
+    JsonObject s;
+    s.add("name", r.stages[i].name)
+        .add("p50_ms", r.stages[i].p50_ms, 3)
+        .add("p99_ms", r.stages[i].p99_ms, 3)
+        .add("max_ms", r.stages[i].max_ms, 3);
+    stages += (i ? ", " : "") + s.str();
+  }
+  std::string queues = "[";
+  for (std::size_t i = 0; i < r.queues.size(); ++i) {
+    JsonObject q;
+    q.add("name", r.queues[i].name)
+        .add("depth", r.queues[i].depth)
+        .add("capacity", r.queues[i].capacity)
+        .add("drops", r.queues[i].drops);
+    queues += (i ? ", " : "") + q.str();
+  }
+  JsonObject j;
+  j.add("type", "stats")
+      .add("utime", io::toUtime(r.t_ns))
+      .add("frames_in", r.frames_in)
+      .add("frames_out", r.frames_out)
+      .add("frames_dropped", r.frames_dropped)
+      .add("frames_tracked", r.frames_tracked)
+      .addRaw("stages", stages + "]")
+      .addRaw("queues", queues + "]")
+      .add("e2e_p50_ms", r.e2e_p50_ms, 3)
+      .add("e2e_p99_ms", r.e2e_p99_ms, 3)
+      .add("e2e_max_ms", r.e2e_max_ms, 3);
+  return j.str();
+}
+
+}  // namespace
+
+int runListen(const std::vector<std::string>& args) {
+  const io::LcmParams defaults;
+  ArgParser p("listen",
+              "Subscribes to the poses (and statistics) svslam publishes on LCM and prints one\n"
+              "JSON line per message on stdout: poses with seq, utime, publish_utime (us),\n"
+              "position (m), orientation (w, x, y, z), the covariance diagonal [rot rad^2,\n"
+              "trans m^2] and the tracking status. Exits 0 after --count poses, 1 when no pose\n"
+              "arrives within --timeout-s.");
+  p.addOption("url", "URL", "LCM URL", defaults.url);
+  p.addOption("channel", "CHANNEL", "pose channel", defaults.pose_channel);
+  p.addOption("stats-channel", "CHANNEL", "statistics channel", defaults.stats_channel);
+  p.addFlag("no-stats", "do not print statistics");
+  p.addOption("count", "N", "exit 0 after N poses (0: never)", "0");
+  p.addOption("timeout-s", "S", "longest wait for the next pose, seconds", "10");
+  if (auto code = parseCommandLine(p, args)) return *code;
+  auto fail = [](const Status& s) { return reportFailure("listen", s); };
+
+  auto count = p.getInt("count", 0, 1'000'000'000);
+  if (!count) return fail(count.status());
+  auto timeout_s = p.getDouble("timeout-s");
+  if (!timeout_s) return fail(timeout_s.status());
+  if (!(*timeout_s > 0.0 && *timeout_s <= 86400.0))
+    return fail(Status::invalidArgument("--timeout-s must be in (0, 86400]"));
+
+  io::LcmParams lp;
+  lp.url = p.get("url");
+  lp.pose_channel = p.get("channel");
+  lp.stats_channel = p.get("stats-channel");
+  auto link = io::LcmLink::open(lp);
+  if (!link) return fail(link.status());
+
+  using Clock = std::chrono::steady_clock;
+  const auto gap = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(*timeout_s));
+  auto deadline = Clock::now() + gap;
+  std::int64_t received = 0, malformed = 0;
+  const std::int64_t wanted = *count;
+  auto on_pose = [&](const std::uint8_t* d, std::size_t n) {
+    if (wanted > 0 && received >= wanted) return;
+    svslam_lcm::pose_t m;
+    Status s = io::decodeLcm(d, n, m);
+    Result<io::PoseReport> r = s ? io::fromLcm(m) : Result<io::PoseReport>(s);
+    if (!r) {
+      ++malformed;
+      std::fprintf(stderr, "svslam listen: skipped a malformed pose: %s\n",
+                   r.status().message().c_str());
+      return;
+    }
+    std::printf("%s\n", poseLine(m, *r).c_str());
+    std::fflush(stdout);
+    ++received;
+    deadline = Clock::now() + gap;
+  };
+  auto on_stats = [&](const std::uint8_t* d, std::size_t n) {
+    svslam_lcm::stats_t m;
+    Status s = io::decodeLcm(d, n, m);
+    Result<io::StatsReport> r = s ? io::fromLcm(m) : Result<io::StatsReport>(s);
+    if (!r) return;
+    std::printf("%s\n", statsLine(*r).c_str());
+    std::fflush(stdout);
+  };
+  if (auto id = (*link)->subscribeRaw(lp.pose_channel, on_pose); !id) return fail(id.status());
+  if (!p.flag("no-stats")) {
+    if (auto id = (*link)->subscribeRaw(lp.stats_channel, on_stats); !id)
+      return fail(id.status());
+  }
+  std::vector<io::Command> ignored;
+  while (wanted == 0 || received < wanted) {
+    const auto left = deadline - Clock::now();
+    if (left <= Clock::duration::zero()) {
+      char secs[32];
+      std::snprintf(secs, sizeof secs, "%g", *timeout_s);
+      return fail(Status::notFound("no pose on '" + lp.pose_channel + "' via '" + lp.url +
+                                   "' within " + secs + " s (received " +
+                                   std::to_string(received) + (wanted ? " of " : "") +
+                                   (wanted ? std::to_string(wanted) : "") + ", " +
+                                   std::to_string(malformed) + " malformed)"));
+    }
+    const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(left).count();
+    if (Status s = (*link)->pollCommands(static_cast<int>(std::clamp<long long>(ms, 0, 100)),
+                                         ignored);
+        !s)
+      return fail(s);
+    ignored.clear();
+  }
+  return 0;
+}
+
+}  // namespace svslam::cli

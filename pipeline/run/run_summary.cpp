@@ -1,0 +1,124 @@
+#include "pipeline/run/run_summary.hpp"
+
+#include <algorithm>
+
+#include "pipeline/cli/json_writer.hpp"
+
+namespace svslam::run {
+
+using cli::JsonObject;
+
+void RunSummary::add(int frame, const SlamFrameResult& sr, bool ekf_mode) {
+  const OdometryFrameResult& r = sr.odometry;
+  if (ekf_mode) {
+    sum_observed += sr.observed;
+    sum_reperceived += sr.reperceived;
+    sum_gated += sr.gated;
+    sum_visible += sr.predicted_visible;
+    sum_no_match += sr.search_no_match;
+    sum_no_stereo += sr.search_no_stereo;
+    sum_in_state += sr.landmarks_in_state;
+    max_in_state = std::max(max_in_state, sr.landmarks_in_state);
+    landmarks_in_map = sr.landmarks_in_map;
+    added += sr.added;
+    retired += sr.retired;
+  }
+  ++frames;
+  if (r.tracked) {
+    ++tracked;
+  } else {
+    ++failure_counts[r.failure];
+    if (failures.size() < 100) failures.emplace_back(frame, r.failure);
+  }
+  sum_corners += r.corners;
+  sum_points += r.stereo_points;
+  sum_matches += r.temporal_matches;
+  sum_inliers += r.inliers;
+  sum_recovered += r.stereo_stats.recovered;
+  sum_continuity_rejected += r.stereo_stats.continuity_rejected;
+}
+
+namespace {
+std::string latency(const rt::LatencySummary& l) {
+  JsonObject j;
+  j.add("p50_ms", l.p50_ms, 3).add("p99_ms", l.p99_ms, 3).add("max_ms", l.max_ms, 3);
+  j.add("count", static_cast<std::int64_t>(l.count));
+  return j.str();
+}
+}  // namespace
+
+std::string statsJson(const config::RunConfig& cfg, const std::string& source,
+                      const RunSummary& s, const StageTimes& times,
+                      const rt::PipelineReport& pipeline, const std::string& error) {
+  JsonObject fails;
+  for (const auto& [reason, n] : s.failure_counts) fails.add(reason, n);
+  std::string list = "[";
+  for (std::size_t i = 0; i < s.failures.size(); ++i) {
+    JsonObject f;
+    f.add("frame", s.failures[i].first).add("reason", s.failures[i].second);
+    list += (i ? ", " : "") + f.str();
+  }
+  list += "]";
+  const double n = std::max(1, s.frames);
+  JsonObject j;
+  j.add("source", source)
+      .add("mode", cfg.mode)
+      .add("frames", s.frames)
+      .add("frames_tracked", s.tracked)
+      .add("frames_without_pose", s.frames - s.tracked)
+      .addRaw("without_pose_reasons", fails.str())
+      .addRaw("without_pose_frames", list)
+      .add("mean_corners", s.sum_corners / n, 1)
+      .add("mean_stereo_points", s.sum_points / n, 1)
+      .add("mean_stereo_continuity_rejected", s.sum_continuity_rejected / n, 1)
+      .add("mean_stereo_recovered", s.sum_recovered / n, 1)
+      .add("mean_temporal_matches", s.sum_matches / n, 1)
+      .add("mean_motion_inliers", s.sum_inliers / n, 1)
+      .add("threads", cfg.threads)
+      .add("dense_stereo", cfg.odometry.dense)
+      .add("seed", static_cast<std::int64_t>(cfg.seed))
+      .add("front_end_median_ms", times.median("front_end"), 3);
+  if (cfg.mode == "ekf") {
+    j.add("landmarks_in_state_mean", s.sum_in_state / n, 1)
+        .add("landmarks_in_state_max", s.max_in_state)
+        .add("landmarks_in_map", s.landmarks_in_map)
+        .add("landmarks_added", s.added)
+        .add("landmarks_retired", s.retired)
+        .add("mean_landmarks_observed", s.sum_observed / n, 1)
+        .add("mean_landmarks_reperceived", s.sum_reperceived / n, 2)
+        .add("mean_observations_gated", s.sum_gated / n, 2)
+        .add("mean_landmarks_predicted_visible", s.sum_visible / n, 1)
+        .add("mean_landmark_search_no_match", s.sum_no_match / n, 2)
+        .add("mean_landmark_search_no_stereo", s.sum_no_stereo / n, 2)
+        .add("ekf_median_ms", times.median("ekf"), 3);
+  }
+  j.addRaw("stage_ms", times.json());
+  JsonObject p;
+  p.add("threaded", !cfg.pipeline.sequential)
+      .add("rate_hz", cfg.pipeline.rate_hz, 3)
+      .add("frames_captured", static_cast<std::int64_t>(pipeline.captured))
+      .add("frames_published", static_cast<std::int64_t>(pipeline.published))
+      .add("frames_dropped", static_cast<std::int64_t>(pipeline.dropped))
+      .add("wall_s", pipeline.wall_s, 3)
+      .add("fps", pipeline.fps, 2)
+      .addRaw("capture", latency(pipeline.capture))
+      .addRaw("stereo", latency(pipeline.stereo))
+      .addRaw("estimator", latency(pipeline.estimate))
+      .addRaw("publisher", latency(pipeline.publish))
+      .addRaw("end_to_end", latency(pipeline.end_to_end));
+  std::string queues = "[";
+  for (std::size_t i = 0; i < pipeline.edges.size(); ++i) {
+    const rt::EdgeReport& e = pipeline.edges[i];
+    JsonObject q;
+    q.add("name", e.name).add("capacity", e.capacity).add("max_depth", e.max_depth);
+    q.add("drops", static_cast<std::int64_t>(e.drops));
+    queues += (i ? ", " : "") + q.str();
+  }
+  queues += "]";
+  p.addRaw("queues", queues);
+  j.addRaw("pipeline", p.str());
+  if (!error.empty()) j.add("error", error);
+  return j.str() + "\n";
+}
+
+}  // namespace svslam::run

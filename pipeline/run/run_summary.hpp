@@ -1,0 +1,38 @@
+#pragma once
+// What `svslam run` accumulates over the frames and writes to stats.json.
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "pipeline/config/run_config.hpp"
+#include "pipeline/realtime/pipeline_runner.hpp"
+#include "pipeline/run/run_outputs.hpp"
+#include "slam/slam_system.hpp"
+
+namespace svslam::run {
+
+struct RunSummary {
+  int frames = 0;
+  int tracked = 0;
+  std::map<std::string, int> failure_counts;
+  std::vector<std::pair<int, std::string>> failures;  // the first ones: frame + reason
+  double sum_corners = 0, sum_points = 0, sum_matches = 0, sum_inliers = 0;
+  double sum_recovered = 0, sum_continuity_rejected = 0;
+  // EKF mode.
+  double sum_observed = 0, sum_reperceived = 0, sum_gated = 0, sum_in_state = 0;
+  double sum_visible = 0, sum_no_match = 0, sum_no_stereo = 0;
+  int max_in_state = 0, landmarks_in_map = 0, added = 0, retired = 0;
+
+  // Adds one processed frame (source index `frame`).
+  void add(int frame, const SlamFrameResult& r, bool ekf_mode);
+};
+
+// stats.json: the run's configuration summary, the per-frame means, the per-stage times
+// (`times`: algorithm stages, ms) and the pipeline's report (stage latencies, end-to-end
+// latency capture -> pose published, queues, drops, frames per second).
+std::string statsJson(const config::RunConfig& cfg, const std::string& source,
+                      const RunSummary& s, const StageTimes& times,
+                      const rt::PipelineReport& pipeline, const std::string& error);
+
+}  // namespace svslam::run
