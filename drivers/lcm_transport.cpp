@@ -125,6 +125,11 @@ void LcmLink::onCommand(const std::uint8_t* data, std::size_t size) {
     last_malformed_ = params_.command_channel + ": " + c.status().message();
     return;
   }
+  if (pending_.size() >= kMaxPendingCommands) {  // nobody polls: keep the newest
+    pending_.erase(pending_.begin());
+    malformed_.fetch_add(1);
+    last_malformed_ = params_.command_channel + ": too many unpolled commands, oldest dropped";
+  }
   pending_.push_back(std::move(c.value()));
 }
 

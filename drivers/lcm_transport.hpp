@@ -51,6 +51,9 @@ class LcmLink {
  public:
   // Longest time the receive mutex is held by one lcm_handle_timeout call, milliseconds.
   static constexpr int kHandleSliceMs = 20;
+  // Commands kept between two pollCommands calls; beyond, the oldest is dropped and counted
+  // as malformed.
+  static constexpr std::size_t kMaxPendingCommands = 256;
   // Handler of a raw subscription: the encoded message bytes.
   using RawHandler = std::function<void(const std::uint8_t* data, std::size_t size)>;
 
