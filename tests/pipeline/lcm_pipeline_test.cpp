@@ -1,0 +1,200 @@
+// svslam run on LCM, between processes: a `svslam listen` subscriber receives every pose with
+// its covariance during a replay; commands (pause, resume, save_map, shutdown) sent to a running
+// `svslam run` are applied and answered. Over udpm inside a private network namespace with a
+// loopback multicast route (skipped with a message where unshare is not permitted).
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "drivers/lcm_messages.hpp"
+#include "drivers/lcm_transport.hpp"
+#include "svslam_lcm/command_status_t.hpp"
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+namespace svslam::io {
+namespace {
+
+const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
+
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// Starts `cmd` with /bin/sh in the background; returns its pid.
+pid_t spawn(const std::string& cmd) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// Exit code of `pid`, waiting at most `timeout` (then kills it and returns -1).
+int waitExit(pid_t pid, std::chrono::seconds timeout) {
+  const auto t0 = std::chrono::steady_clock::now();
+  for (;;) {
+    int st = 0;
+    const pid_t r = ::waitpid(pid, &st, WNOHANG);
+    if (r == pid) return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+    if (std::chrono::steady_clock::now() - t0 > timeout) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &st, 0);
+      return -1;
+    }
+    std::this_thread::sleep_for(20ms);
+  }
+}
+
+int countLines(const std::string& s, const std::string& needle) {
+  int n = 0;
+  for (std::size_t p = s.find(needle); p != std::string::npos; p = s.find(needle, p + 1)) ++n;
+  return n;
+}
+
+bool inner(const char* name) {
+  const char* v = std::getenv("SVSLAM_LCM_PIPELINE_INNER");
+  return v && std::string(v) == name;
+}
+
+// Runs this binary's test `name` inside a private network namespace.
+void runInNamespace(const std::string& name) {
+  if (std::system("unshare -rn true >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "unshare -rn is not permitted here: no private network namespace with a "
+                    "multicast route for the udpm test";
+  const std::string self = fs::read_symlink("/proc/self/exe").string();
+  const std::string cmd =
+      "unshare -rn sh -c 'ip link set lo up && ip route add 239.0.0.0/8 dev lo && "
+      "SVSLAM_LCM_PIPELINE_INNER=" + name + " exec \"" + self +
+      "\" --gtest_filter=LcmPipeline.Inner" + name + "'";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << "inner test failed (output above)";
+}
+
+TEST(LcmPipeline, InnerListenerGetsEveryPose) {
+  if (!inner("ListenerGetsEveryPose")) GTEST_SKIP() << "runs inside the namespace of ListenerGetsEveryPose";
+  const fs::path dir = fs::temp_directory_path() / ("svslam_lcmpipe_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  constexpr int kFrames = 12;
+  const pid_t listener = spawn(std::string(SVSLAM_CLI) + " listen --url '" + kUrl + "' --count " +
+                               std::to_string(kFrames) + " --timeout-s 60 > " +
+                               (dir / "poses.jsonl").string() + " 2> " +
+                               (dir / "listen_err.txt").string());
+  std::this_thread::sleep_for(500ms);  // subscribed before the first pose
+  const std::string run = std::string(SVSLAM_CLI) +
+                          " run --source synthetic:width=320,height=240,frames=12 --lcm-url '" +
+                          kUrl + "' --out " + (dir / "out").string() + " > " +
+                          (dir / "run_out.txt").string() + " 2>&1";
+  const int run_rc = std::system(run.c_str());
+  ASSERT_EQ(WEXITSTATUS(run_rc), 0) << slurp(dir / "run_out.txt");
+  ASSERT_EQ(waitExit(listener, std::chrono::seconds(30)), 0) << slurp(dir / "listen_err.txt");
+  const std::string poses = slurp(dir / "poses.jsonl");
+  EXPECT_EQ(countLines(poses, "\"type\": \"pose\""), kFrames) << poses;
+  for (int i = 0; i < kFrames; ++i)
+    EXPECT_NE(poses.find("\"seq\": " + std::to_string(i) + ","), std::string::npos) << i;
+  EXPECT_EQ(countLines(poses, "\"cov_diag\""), kFrames);
+  EXPECT_EQ(poses.find("null"), std::string::npos);  // every covariance finite
+  fs::remove_all(dir);
+}
+
+TEST(LcmPipeline, ListenerGetsEveryPose) { runInNamespace("ListenerGetsEveryPose"); }
+
+// Collects the command_status_t answers.
+struct StatusSink {
+  std::mutex mu;
+  std::vector<CommandStatus> got;
+  LcmLink::RawHandler handler() {
+    return [this](const std::uint8_t* data, std::size_t size) {
+      svslam_lcm::command_status_t m;
+      if (!decodeLcm(data, size, m)) return;
+      auto r = fromLcm(m);
+      if (!r) return;
+      std::lock_guard<std::mutex> lock(mu);
+      got.push_back(*r);
+    };
+  }
+  bool has(std::int64_t seq) {
+    std::lock_guard<std::mutex> lock(mu);
+    for (const auto& s : got)
+      if (s.seq == seq) return true;
+    return false;
+  }
+  CommandStatus find(std::int64_t seq) {
+    std::lock_guard<std::mutex> lock(mu);
+    for (const auto& s : got)
+      if (s.seq == seq) return s;
+    return {};
+  }
+};
+
+TEST(LcmPipeline, InnerCommandsAreAppliedAndAnswered) {
+  if (!inner("CommandsAreAppliedAndAnswered")) GTEST_SKIP() << "runs inside the namespace of CommandsAreAppliedAndAnswered";
+  const fs::path dir = fs::temp_directory_path() / ("svslam_lcmcmd_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const pid_t run = spawn(std::string(SVSLAM_CLI) +
+                          " run --source synthetic:width=320,height=240,frames=2000 --rate 20"
+                          " --lcm-url '" + kUrl + "' --out " + (dir / "out").string() + " > " +
+                          (dir / "run_out.txt").string() + " 2>&1");
+  LcmParams p;
+  p.url = kUrl;
+  auto link = LcmLink::open(p);
+  ASSERT_TRUE(link.isOk()) << link.status().message();
+  StatusSink sink;
+  ASSERT_TRUE((*link)->subscribeRaw(p.status_channel, sink.handler()).isOk());
+  std::atomic<bool> stop{false};
+  std::thread rx([&] {
+    while (!stop.load()) (void)(*link)->handle(50);
+  });
+  auto send = [&](CommandKind k, std::int64_t seq, const std::string& arg = "") {
+    // Resend until answered (the run may not be listening yet), at most 20 s.
+    const auto t0 = std::chrono::steady_clock::now();
+    while (!sink.has(seq) && std::chrono::steady_clock::now() - t0 < 20s) {
+      (void)(*link)->publishCommand({0, seq, k, arg});
+      std::this_thread::sleep_for(300ms);
+    }
+    return sink.find(seq);
+  };
+  const CommandStatus paused = send(CommandKind::kPause, 1);
+  EXPECT_EQ(paused.command, "pause");
+  EXPECT_TRUE(paused.ok);
+  const CommandStatus resumed = send(CommandKind::kResume, 2);
+  EXPECT_EQ(resumed.command, "resume");
+  const std::string map_path = (dir / "saved_map.ply").string();
+  const CommandStatus saved = send(CommandKind::kSaveMap, 3, map_path);
+  EXPECT_EQ(saved.command, "save_map");
+  EXPECT_TRUE(saved.ok) << saved.message;
+  EXPECT_TRUE(fs::exists(map_path));
+  const CommandStatus down = send(CommandKind::kShutdown, 4);
+  EXPECT_EQ(down.command, "shutdown");
+  const int rc = waitExit(run, std::chrono::seconds(30));
+  stop = true;
+  rx.join();
+  EXPECT_EQ(rc, 0) << slurp(dir / "run_out.txt");
+  // Everything captured before the shutdown was written: one trajectory line per frame.
+  const std::string traj = slurp(dir / "out" / "trajectory_kitti.txt");
+  const std::string stats = slurp(dir / "out" / "stats.json");
+  const int lines = countLines(traj, "\n");
+  EXPECT_GT(lines, 0);
+  EXPECT_LT(lines, 2000);
+  EXPECT_NE(stats.find("\"frames\": " + std::to_string(lines) + ","), std::string::npos) << stats;
+  fs::remove_all(dir);
+}
+
+TEST(LcmPipeline, CommandsAreAppliedAndAnswered) { runInNamespace("CommandsAreAppliedAndAnswered"); }
+
+}  // namespace
+}  // namespace svslam::io
