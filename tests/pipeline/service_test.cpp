@@ -1,0 +1,142 @@
+// `svslam run` as a systemd service, without systemd: a unix datagram socket stands in for
+// NOTIFY_SOCKET and receives READY=1 (after the first pose), WATCHDOG=1 (from the pipeline's
+// health check while frames complete) and STOPPING=1; SIGTERM mid-run stops capture, drains,
+// writes every output whole and exits 0.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+int countOf(const std::string& s, const std::string& needle) {
+  int n = 0;
+  for (std::size_t p = s.find(needle); p != std::string::npos; p = s.find(needle, p + 1)) ++n;
+  return n;
+}
+
+class Service : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("svslam_svc_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    sock_path_ = (dir_ / "notify.sock").string();
+    fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    ASSERT_GE(fd_, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::strncpy(addr.sun_path, sock_path_.c_str(), sizeof(addr.sun_path) - 1);
+    ASSERT_EQ(::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+    timeval tv{0, 100000};
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  }
+  void TearDown() override {
+    ::close(fd_);
+    fs::remove_all(dir_);
+  }
+  // Starts svslam run with the notify environment; returns its pid.
+  pid_t start(const std::string& args) {
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      ::setenv("NOTIFY_SOCKET", sock_path_.c_str(), 1);
+      ::setenv("WATCHDOG_USEC", "400000", 1);  // ping every 200 ms while frames complete
+      ::setenv("WATCHDOG_PID", std::to_string(::getpid()).c_str(), 1);
+      const std::string cmd = std::string("exec ") + SVSLAM_CLI + " run " + args + " --out " +
+                              (dir_ / "out").string() + " > " + (dir_ / "stdout.txt").string() +
+                              " 2> " + (dir_ / "stderr.txt").string();
+      ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    return pid;
+  }
+  // Reads notifications until `until` is seen or the deadline passes; returns all of them.
+  std::string readUntil(const std::string& until, std::chrono::seconds timeout) {
+    const auto t0 = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - t0 < timeout) {
+      char buf[512];
+      const ssize_t n = ::recv(fd_, buf, sizeof buf - 1, 0);
+      if (n > 0) {
+        buf[n] = 0;
+        got_ += std::string(buf) + "\n";
+        if (got_.find(until) != std::string::npos) break;
+      }
+    }
+    return got_;
+  }
+  fs::path dir_;
+  std::string sock_path_;
+  int fd_ = -1;
+  std::string got_;
+};
+
+int waitExit(pid_t pid) {
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+}
+
+TEST_F(Service, ReadyWatchdogAndCleanStopOnSigterm) {
+  // A long paced replay: SIGTERM arrives in the middle of it.
+  const pid_t pid = start("--source synthetic:width=320,height=240,frames=2000 --rate 20");
+  ASSERT_GT(pid, 0);
+  const std::string ready = readUntil("READY=1", 60s);
+  ASSERT_NE(ready.find("READY=1"), std::string::npos) << slurp(dir_ / "stderr.txt");
+  readUntil("WATCHDOG=1", 10s);
+  readUntil("\nWATCHDOG=1", 10s);  // a second ping: pings repeat while frames complete
+  std::this_thread::sleep_for(500ms);
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  const std::string all = readUntil("STOPPING=1", 30s);
+  const int rc = waitExit(pid);
+  EXPECT_EQ(rc, 0) << slurp(dir_ / "stderr.txt");
+  EXPECT_GE(countOf(all, "WATCHDOG=1"), 2) << all;
+  EXPECT_NE(all.find("STOPPING=1"), std::string::npos) << all;
+  // Every output whole: one line per frame in each file, stats.json complete, the map there.
+  const fs::path out = dir_ / "out";
+  const std::string traj = slurp(out / "trajectory_kitti.txt");
+  const std::string cov = slurp(out / "pose_covariance.txt");
+  const std::string stats = slurp(out / "stats.json");
+  const int frames = countOf(traj, "\n");
+  EXPECT_GT(frames, 0);
+  EXPECT_LT(frames, 2000);
+  EXPECT_EQ(countOf(cov, "\n"), frames);
+  EXPECT_EQ(traj.back(), '\n');
+  EXPECT_NE(stats.find("\"frames\": " + std::to_string(frames) + ","), std::string::npos) << stats;
+  EXPECT_EQ(stats.back(), '\n');
+  EXPECT_TRUE(fs::exists(out / "landmarks.ply"));
+  for (const auto& e : fs::directory_iterator(out))  // no temporary file left behind
+    EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+  EXPECT_NE(slurp(dir_ / "stderr.txt").find("stop requested (signal 15)"), std::string::npos);
+}
+
+TEST_F(Service, NoWatchdogPingWithoutProgress) {
+  // A source that fails to open: the process exits non-zero and never says READY=1.
+  const pid_t pid = start("--source kitti:/nonexistent/folder");
+  const int rc = waitExit(pid);
+  EXPECT_NE(rc, 0);
+  const std::string all = readUntil("READY=1", 1s);
+  EXPECT_EQ(all.find("READY=1"), std::string::npos) << all;
+  EXPECT_EQ(all.find("WATCHDOG=1"), std::string::npos) << all;
+  EXPECT_NE(slurp(dir_ / "stderr.txt").find("/nonexistent/folder"), std::string::npos);
+}
+
+}  // namespace
