@@ -1,0 +1,158 @@
+// End-to-end latency of the threaded pipeline (capture instant -> pose published) replaying a
+// recorded sequence read into memory first, paced at a fixed rate as if captured live; plus the
+// throughput as fast as possible. Each scenario also runs the same frames with --sequential as
+// the in-run reference: its per-frame processing time is what one thread would take.
+//
+//   bench_latency [--scenario blimp10|kitti10|fast640|all] [--frames N] [--threads T]
+//
+// Scenarios (the targets):
+//   blimp10  synthetic blimp flight 1024x768 at 10 Hz: p99 latency <= 60 ms, zero drops;
+//   kitti10  KITTI odometry seq A (../shared/data) at 10 Hz: zero drops (skipped if absent);
+//   fast640  synthetic 640x480 as fast as possible: >= 20 frames per second end to end.
+// Prints one JSON object per scenario.
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "drivers/preloaded_source.hpp"
+#include "drivers/stereo_source.hpp"
+#include "pipeline/config/run_config.hpp"
+#include "pipeline/realtime/pipeline_runner.hpp"
+#include "pipeline/realtime/stage_work.hpp"
+
+using namespace svslam;
+
+namespace {
+
+struct Outcome {
+  bool ok = false;
+  rt::PipelineReport report;
+};
+
+std::unique_ptr<io::PreloadedSource> load(const std::string& spec, int frames) {
+  auto src = io::openStereoSource(spec);
+  if (!src) {
+    std::fprintf(stderr, "bench_latency: %s\n", src.status().message().c_str());
+    return nullptr;
+  }
+  auto pre = io::preload(std::move(*src), frames);
+  if (!pre) {
+    std::fprintf(stderr, "bench_latency: %s\n", pre.status().message().c_str());
+    return nullptr;
+  }
+  return std::move(*pre);
+}
+
+Outcome runOnce(io::PreloadedSource* frames_in_memory, double rate_hz, bool sequential,
+                int threads) {
+  Outcome o;
+  if (!frames_in_memory) return o;
+  io::PreloadedSource& source = *frames_in_memory;
+  source.rewind();
+  config::RunConfig cfg;
+  cfg.threads = threads;
+  cfg.odometry.dense_stereo.num_stripes = threads;
+  cfg.pipeline.sequential = sequential;
+  cfg.pipeline.rate_hz = rate_hz;
+  const std::string out = (std::filesystem::temp_directory_path() / "svslam_bench_latency").string();
+  std::filesystem::create_directories(out);
+  rt::RunWork work(cfg, source, out, nullptr);
+  if (Status s = work.init(); !s) {
+    std::fprintf(stderr, "bench_latency: %s\n", s.message().c_str());
+    return o;
+  }
+  rt::PipelineOptions opts;
+  opts.sequential = sequential;
+  opts.rate_hz = rate_hz;
+  opts.keep_newest = rate_hz > 0;  // as for a camera: a late frame is dropped, and counted
+  std::vector<std::unique_ptr<rt::FrameSlot>> slots;
+  for (int i = 0; i < rt::PipelineRunner::slotsNeeded(opts); ++i)
+    slots.push_back(std::make_unique<rt::FrameSlot>());
+  rt::PipelineRunner runner(opts, work);
+  rt::PipelineControl control;
+  const Status s = runner.run(slots, control, nullptr);
+  (void)work.finish();
+  if (!s) std::fprintf(stderr, "bench_latency: %s\n", s.message().c_str());
+  o.ok = s.isOk();
+  o.report = runner.report();
+  return o;
+}
+
+void print(const char* name, const std::string& spec, double rate_hz, const Outcome& thr,
+           const Outcome& seq, const char* target) {
+  const rt::PipelineReport& r = thr.report;
+  const rt::PipelineReport& q = seq.report;
+  // One thread's time per frame: the sum of the stage times of the sequential run.
+  const double seq_frame_ms = q.stereo.p50_ms + q.estimate.p50_ms + q.publish.p50_ms;
+  std::printf(
+      "{\"scenario\": \"%s\", \"source\": \"%s\", \"rate_hz\": %.1f, \"frames\": %lld, "
+      "\"published\": %lld, \"dropped\": %lld, \"latency_p50_ms\": %.2f, \"latency_p99_ms\": %.2f, "
+      "\"latency_max_ms\": %.2f, \"fps\": %.2f, \"stereo_p50_ms\": %.2f, \"estimator_p50_ms\": %.2f, "
+      "\"sequential_fps\": %.2f, \"sequential_frame_p50_ms\": %.2f, "
+      "\"threaded_over_sequential_fps\": %.2f, \"target\": \"%s\"}\n",
+      name, spec.c_str(), rate_hz, static_cast<long long>(r.captured),
+      static_cast<long long>(r.published), static_cast<long long>(r.dropped), r.end_to_end.p50_ms,
+      r.end_to_end.p99_ms, r.end_to_end.max_ms, r.fps, r.stereo.p50_ms, r.estimate.p50_ms, q.fps,
+      seq_frame_ms, q.fps > 0 ? r.fps / q.fps : 0.0, target);
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string scenario = "all";
+  int frames = 100, threads = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--scenario" && i + 1 < argc) {
+      scenario = argv[++i];
+    } else if (a == "--frames" && i + 1 < argc) {
+      frames = std::atoi(argv[++i]);
+    } else if (a == "--threads" && i + 1 < argc) {
+      threads = std::atoi(argv[++i]);
+    } else {
+      std::fprintf(stderr,
+                   "usage: bench_latency [--scenario blimp10|kitti10|fast640|all] [--frames N] "
+                   "[--threads T]\n");
+      return a == "--help" ? 0 : 2;
+    }
+  }
+  if (frames < 2 || threads < 1) {
+    std::fprintf(stderr, "bench_latency: --frames must be >= 2 and --threads >= 1\n");
+    return 2;
+  }
+  auto scenarioOn = [&](const char* s) { return scenario == "all" || scenario == s; };
+  int failures = 0;
+  if (scenarioOn("blimp10")) {
+    const std::string spec = "synthetic:frames=" + std::to_string(frames);
+    auto mem = load(spec, frames);
+    const Outcome thr = runOnce(mem.get(), 10.0, false, threads);
+    const Outcome seq = runOnce(mem.get(), 0.0, true, threads);
+    failures += !thr.ok || !seq.ok;
+    print("blimp10", spec, 10.0, thr, seq, "p99 <= 60 ms, 0 dropped");
+  }
+  if (scenarioOn("kitti10")) {
+    const std::string dir = std::string(SVSLAM_DATA_DIR) + "/kitti_odometry_seq_a";
+    if (!std::filesystem::exists(dir + "/calib.txt")) {
+      std::printf("{\"scenario\": \"kitti10\", \"skipped\": \"%s not found\"}\n", dir.c_str());
+    } else {
+      auto mem = load("kitti:" + dir, frames);
+      const Outcome thr = runOnce(mem.get(), 10.0, false, threads);
+      const Outcome seq = runOnce(mem.get(), 0.0, true, threads);
+      failures += !thr.ok || !seq.ok;
+      print("kitti10", "kitti:" + dir, 10.0, thr, seq, "0 dropped");
+    }
+  }
+  if (scenarioOn("fast640")) {
+    const std::string spec = "synthetic:width=640,height=480,frames=" + std::to_string(frames);
+    auto mem = load(spec, frames);
+    const Outcome thr = runOnce(mem.get(), 0.0, false, threads);
+    const Outcome seq = runOnce(mem.get(), 0.0, true, threads);
+    failures += !thr.ok || !seq.ok;
+    print("fast640", spec, 0.0, thr, seq, ">= 20 fps");
+  }
+  return failures ? 1 : 0;
+}
