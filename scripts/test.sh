@@ -1,9 +1,24 @@
 #!/usr/bin/env bash
 # Installs dependencies, builds and runs every test (ctest). SANITIZE=1 builds into
-# build-asan/ with AddressSanitizer + UndefinedBehaviorSanitizer instead.
+# build-asan/ with AddressSanitizer + UndefinedBehaviorSanitizer instead; TSAN=1 builds the
+# threaded tests into build-tsan/ with ThreadSanitizer and runs those.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
+if [ "${TSAN:-0}" = "1" ]; then
+  # ThreadSanitizer over the tests that run threads: the pipeline (edges, runner, svslam run
+  # threaded vs sequential, service, LCM between processes), the executor and the LCM transport.
+  BUILD_DIR=${BUILD_DIR:-build-tsan}
+  targets=(svslam pipeline_realtime_pipeline_test pipeline_executor_test pipeline_service_test
+           pipeline_lcm_pipeline_test drivers_lcm_transport_test drivers_lcm_source_test)
+  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSVSLAM_WERROR=ON -DSVSLAM_TSAN=ON \
+        -DSVSLAM_BUILD_BENCH=OFF
+  cmake --build "$BUILD_DIR" -j "$(nproc)" --target "${targets[@]}"
+  export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1}
+  regex="^($(IFS='|'; echo "${targets[*]:1}"))\\."
+  ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$(nproc)" -R "$regex"
+  exit 0
+fi
 if [ "${SANITIZE:-0}" = "1" ]; then export BUILD_DIR=${BUILD_DIR:-build-asan}; fi
 BUILD_DIR=${BUILD_DIR:-build}
 export BUILD_DIR

@@ -1,6 +1,9 @@
 // svslam run: the real-time pipeline over a source (recorded or live), writing trajectories,
 // covariances, the map and stats, publishing on LCM, under systemd when started as a service.
+#include <unistd.h>
+
 #include <cmath>
+#include <utility>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -143,6 +146,20 @@ int runRun(const std::vector<std::string>& args) {
   if (Status s = config::loadRunConfig(p.has("config") ? p.get("config") : "", cfg); !s)
     return fail(s);
   if (Status s = applyOverrides(p, cfg); !s) return fail(s);
+  {
+    const long ncpu = ::sysconf(_SC_NPROCESSORS_CONF);
+    const std::pair<const char*, const service::ThreadScheduling*> stages[] = {
+        {"capture", &cfg.pipeline.capture},
+        {"stereo", &cfg.pipeline.stereo},
+        {"estimator", &cfg.pipeline.estimator},
+        {"publisher", &cfg.pipeline.publisher}};
+    for (const auto& [name, sched] : stages)
+      for (int c : sched->cpus)
+        if (ncpu > 0 && c >= ncpu)
+          return fail(Status::invalidArgument(
+              std::string("pipeline.scheduling.") + name + ".cpus: CPU " + std::to_string(c) +
+              " does not exist (this machine has CPUs 0.." + std::to_string(ncpu - 1) + ")"));
+  }
   const std::string source_spec = p.has("source") ? p.get("source") : cfg.source;
   auto opened = io::openStereoSource(source_spec);
   if (!opened) return fail(opened.status());
