@@ -7,11 +7,6 @@
 namespace svslam::config {
 namespace {
 
-#define SVSLAM_TRY(expr)                    \
-  do {                                      \
-    if (Status s_ = (expr); !s_) return s_; \
-  } while (0)
-
 Status readScheduling(ConfigReader& r, const std::string& stage, service::ThreadScheduling& t) {
   const std::string key = "pipeline.scheduling." + stage;
   std::vector<double> cpus;

@@ -5,11 +5,6 @@
 namespace svslam::config {
 namespace {
 
-#define SVSLAM_TRY(expr)             \
-  do {                               \
-    if (Status s_ = (expr); !s_) return s_; \
-  } while (0)
-
 Status readCorners(ConfigReader& r, CornerParams& c) {
   std::string resp = c.response == CornerResponse::kHarris ? "harris" : "shi-tomasi";
   SVSLAM_TRY(r.read("detector.response", resp, {"harris", "shi-tomasi"}));

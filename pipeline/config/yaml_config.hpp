@@ -13,6 +13,13 @@
 
 #include "core/status.hpp"
 
+// Returns the Status of `expr` from the enclosing function when it is an error (the key
+// readers of the run configuration chain many reads).
+#define SVSLAM_TRY(expr)                    \
+  do {                                      \
+    if (Status s_ = (expr); !s_) return s_; \
+  } while (0)
+
 namespace svslam::config {
 
 class ConfigReader {
