@@ -5,6 +5,7 @@
 // in [-1, 1]; 1 = identical up to gain and offset. Flat patches (no variance) score -1 so they
 // never win a match.
 #include <cstdint>
+#include <vector>
 
 #include "core/image.hpp"
 
@@ -29,5 +30,18 @@ PatchStats patchStats(ImageView<const std::uint8_t> a, int x, int y, int h);
 // zncc of the fixed patch `pa` of image `a` against the patch of `b` at (xb, yb).
 float zncc(ImageView<const std::uint8_t> a, const PatchStats& pa, ImageView<const std::uint8_t> b,
            int xb, int yb);
+
+// Scratch space of znccRow, kept by the caller between calls (no allocation once warm).
+struct ZnccRowScratch {
+  std::vector<std::int32_t> sab, col_sum, col_sq;
+};
+
+// A row scan: out[j] = zncc(a, pa, b, xb_first + j, yb) for j in [0, n), bit for bit the same
+// values as the single-candidate zncc (the sums are exact integers; the final float expression
+// is the same). The patch sums of `b` come from column sums shared by neighbouring candidates,
+// and the cross products are accumulated over the candidates in vectorisable loops.
+// Precondition: every candidate patch inside `b`; n >= 1.
+void znccRow(ImageView<const std::uint8_t> a, const PatchStats& pa, ImageView<const std::uint8_t> b,
+             int xb_first, int yb, int n, float* out, ZnccRowScratch& scratch);
 
 }  // namespace svslam

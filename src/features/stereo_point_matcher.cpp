@@ -34,6 +34,7 @@ Status StereoMatchParams::validate() const {
 StereoPointMatcher::StereoPointMatcher(const StereoMatchParams& params)
     : params_(params), init_status_(params.validate()) {
   scores_.reserve(1024);
+  row_.reserve(1024);
 }
 
 namespace {
@@ -47,6 +48,16 @@ float parabolaPeak(float sm, float s0, float sp) {
 
 }  // namespace
 
+void StereoPointMatcher::scanRow(ImageView<const std::uint8_t> left,
+                                 ImageView<const std::uint8_t> right, const PatchStats& ps, int y,
+                                 int d0, int d1) {
+  const std::size_t n = static_cast<std::size_t>(d1 - d0 + 1);
+  row_.resize(n);
+  scores_.resize(n);
+  znccRow(left, ps, right, ps.x - d1, y, static_cast<int>(n), row_.data(), zncc_scratch_);
+  for (std::size_t k = 0; k < n; ++k) scores_[k] = row_[n - 1 - k];
+}
+
 bool StereoPointMatcher::searchRow(ImageView<const std::uint8_t> left,
                                    ImageView<const std::uint8_t> right, int x, int y, int d0,
                                    int d1, StereoMatch& m) {
@@ -55,11 +66,10 @@ bool StereoPointMatcher::searchRow(ImageView<const std::uint8_t> left,
   if (d1 < d0) return false;
   const PatchStats ps = patchStats(left, x, y, h);
   if (ps.inv_norm == 0.0) return false;
-  scores_.resize(static_cast<std::size_t>(d1 - d0 + 1));
+  scanRow(left, right, ps, y, d0, d1);
   int best = -1;
   for (int d = d0; d <= d1; ++d) {
-    const float s = zncc(left, ps, right, x - d, y);
-    scores_[static_cast<std::size_t>(d - d0)] = s;
+    const float s = scores_[static_cast<std::size_t>(d - d0)];
     if (best < 0 || s > scores_[static_cast<std::size_t>(best)]) best = d - d0;
   }
   const float sb = scores_[static_cast<std::size_t>(best)];
@@ -220,9 +230,7 @@ void StereoPointMatcher::recover(ImageView<const std::uint8_t> left,
     if (d1 - d0 < 2) continue;
     const PatchStats ps = patchStats(left, x, y, h);
     if (ps.inv_norm == 0.0) continue;
-    scores_.resize(static_cast<std::size_t>(d1 - d0 + 1));
-    for (int d = d0; d <= d1; ++d)
-      scores_[static_cast<std::size_t>(d - d0)] = zncc(left, ps, right, x - d, y);
+    scanRow(left, right, ps, y, d0, d1);
     float best_cost = params_.recovery_dist_th_px;
     StereoMatch best = r;
     bool found = false;

@@ -27,6 +27,7 @@
 #include "core/image.hpp"
 #include "core/status.hpp"
 #include "features/delaunay.hpp"
+#include "features/patch_similarity.hpp"
 
 namespace svslam {
 
@@ -90,6 +91,10 @@ class StereoPointMatcher {
   // Best integer disparity of point (x, y) over [d0, d1]; false when not accepted.
   bool searchRow(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right, int x,
                  int y, int d0, int d1, StereoMatch& m);
+  // scores_[d - d0] = zncc of the left patch `ps` (centre (ps.x, y)) against the right patch at
+  // (ps.x - d, y), d in [d0, d1]. Precondition: every right patch inside the image.
+  void scanRow(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+               const PatchStats& ps, int y, int d0, int d1);
   void continuityCheck(std::vector<StereoMatch>& matches, std::vector<StereoMatch>& rejected);
   void recover(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                std::vector<StereoMatch>& kept, const std::vector<StereoMatch>& rejected);
@@ -97,6 +102,8 @@ class StereoPointMatcher {
   StereoMatchParams params_;
   Status init_status_;
   std::vector<float> scores_;
+  std::vector<float> row_;  // znccRow output, right-image order
+  ZnccRowScratch zncc_scratch_;
   std::vector<StereoMatch> rejected_;
   std::vector<std::uint8_t> keep_;
   std::vector<Eigen::Vector2d> tri_pts_;
