@@ -14,7 +14,7 @@ if [ "${TSAN:-0}" = "1" ]; then
   cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSVSLAM_WERROR=ON -DSVSLAM_TSAN=ON \
         -DSVSLAM_BUILD_BENCH=OFF
   cmake --build "$BUILD_DIR" -j "$(nproc)" --target "${targets[@]}"
-  export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1}
+  export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp}
   regex="^($(IFS='|'; echo "${targets[*]:1}"))\\."
   ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$(nproc)" -R "$regex"
   exit 0

@@ -218,10 +218,21 @@ TEST(LcmTransport, UdpmInnerPublisherSubscriberPair) {
   PoseSink sink;
   ASSERT_TRUE((*sub)->subscribeRaw("SVSLAM_POSE", sink.handler()).isOk());
   std::atomic<bool> stop{false};
-  std::vector<Command> commands;
+  std::vector<Command> commands;  // filled by rx, read under commands_mu
+  std::mutex commands_mu;
   std::thread rx([&] {
-    while (!stop.load()) ASSERT_TRUE((*sub)->pollCommands(50, commands).isOk());
+    std::vector<Command> got;
+    while (!stop.load()) {
+      ASSERT_TRUE((*sub)->pollCommands(50, got).isOk());
+      std::lock_guard<std::mutex> lock(commands_mu);
+      commands.insert(commands.end(), got.begin(), got.end());
+      got.clear();
+    }
   });
+  auto noCommand = [&] {
+    std::lock_guard<std::mutex> lock(commands_mu);
+    return commands.empty();
+  };
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   constexpr int kPoses = 50;
   for (int i = 0; i < kPoses; ++i) {
@@ -230,7 +241,7 @@ TEST(LcmTransport, UdpmInnerPublisherSubscriberPair) {
   }
   ASSERT_TRUE((*pub)->publishCommand({0, 5, CommandKind::kShutdown, ""}).isOk());
   const auto t0 = Clock::now();
-  while ((sink.size() < kPoses || commands.empty()) && Clock::now() - t0 < std::chrono::seconds(3))
+  while ((sink.size() < kPoses || noCommand()) && Clock::now() - t0 < std::chrono::seconds(3))
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   stop.store(true);
   rx.join();
