@@ -245,7 +245,9 @@ int runRun(const std::vector<std::string>& args) {
     } else if (control.pause) {
       watchdog.idle(now);
     }
-    if (watchdog.shouldPing(now)) notifier.watchdog();
+    // After STOPPING=1 the service manager's stop timeout applies: no more pings (a notify
+    // socket nobody reads any more must not block the drain).
+    if (!stopping_sent && watchdog.shouldPing(now)) notifier.watchdog();
     if (progress_ns > 0 && now >= next_progress) {
       logLine("progress: " + std::to_string(published) + " poses, " +
               std::to_string(runner.captured()) + " frames captured");
