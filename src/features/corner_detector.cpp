@@ -23,14 +23,14 @@ std::vector<float> gaussian(double sigma, bool derivative) {
 // Separable convolution with replicated borders: horizontal kernel kx, then vertical ky,
 //   tmp(x, y) = sum_k kx[k + rx] in(x - k, y),   out(x, y) = sum_k ky[k + ry] tmp(x, y - k),
 // coordinates clamped to the image. Loops run over x innermost so they vectorise; `row` is
-// scratch space of at least w + 2 rx floats.
+// scratch space of at least w + 2 rx floats. Rows [y0, y1) of one pass.
 template <class T>
-void convolve(ImageView<const T> in, const std::vector<float>& kx, const std::vector<float>& ky,
-              ImageF32& tmp, ImageF32& out, std::vector<float>& row) {
-  const int w = in.width, h = in.height;
-  const int rx = static_cast<int>(kx.size() / 2), ry = static_cast<int>(ky.size() / 2);
+void horizontalRows(ImageView<const T> in, const std::vector<float>& kx, ImageF32& tmp,
+                    std::vector<float>& row, int y0, int y1) {
+  const int w = in.width;
+  const int rx = static_cast<int>(kx.size() / 2);
   row.resize(static_cast<std::size_t>(w + 2 * rx));
-  for (int y = 0; y < h; ++y) {
+  for (int y = y0; y < y1; ++y) {
     const T* src = in.row(y);
     float* pad = row.data();  // pad[i] = in(clamp(i - rx), y)
     for (int i = 0; i < rx; ++i) pad[i] = static_cast<float>(src[0]);
@@ -44,7 +44,13 @@ void convolve(ImageView<const T> in, const std::vector<float>& kx, const std::ve
       for (int x = 0; x < w; ++x) t[x] += c * p[x];
     }
   }
-  for (int y = 0; y < h; ++y) {
+}
+
+void verticalRows(const ImageF32& tmp, const std::vector<float>& ky, ImageF32& out, int y0,
+                  int y1) {
+  const int w = tmp.width(), h = tmp.height();
+  const int ry = static_cast<int>(ky.size() / 2);
+  for (int y = y0; y < y1; ++y) {
     float* o = out.row(y);
     for (int x = 0; x < w; ++x) o[x] = 0.0f;
     for (int k = -ry; k <= ry; ++k) {
@@ -54,6 +60,9 @@ void convolve(ImageView<const T> in, const std::vector<float>& kx, const std::ve
     }
   }
 }
+
+// Rows of stripe i of n over h rows.
+inline int stripeBegin(int i, int n, int h) { return static_cast<int>(static_cast<long>(h) * i / n); }
 
 }  // namespace
 
@@ -85,15 +94,40 @@ CornerDetector::CornerDetector(const CornerParams& params, int width, int height
   cells_.resize(static_cast<std::size_t>(params_.grid_cols * params_.grid_rows));
 }
 
+template <class T>
+void CornerDetector::convolve(ImageView<const T> in, const std::vector<float>& kx,
+                              const std::vector<float>& ky, ImageF32& out, Executor& executor) {
+  const int n = static_cast<int>(rows_.size());
+  const int h = in.height;
+  executor.parallelFor(n, [&](int i) {
+    horizontalRows(in, kx, tmp_, rows_[static_cast<std::size_t>(i)], stripeBegin(i, n, h),
+                   stripeBegin(i + 1, n, h));
+  });
+  executor.parallelFor(n, [&](int i) {
+    verticalRows(tmp_, ky, out, stripeBegin(i, n, h), stripeBegin(i + 1, n, h));
+  });
+}
+
 Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<Corner>& out) {
+  SerialExecutor serial;
+  return process(image, out, serial);
+}
+
+Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<Corner>& out,
+                               Executor& executor) {
   out.clear();
   if (!init_status_) return init_status_;
   if (image.width != width_ || image.height != height_)
     return Status::invalidArgument("corner detector built for another image size");
+  // Row stripes: a few per worker; one with a serial executor.
+  const int n = executor.concurrency() > 1 ? std::min(4 * executor.concurrency(), height_) : 1;
+  if (static_cast<int>(rows_.size()) != n) rows_.resize(static_cast<std::size_t>(n));
+  stripe_max_.assign(static_cast<std::size_t>(n), 0.0f);
   // Gradients (derivative of Gaussian along one axis, Gaussian along the other).
-  convolve<std::uint8_t>(image, kd_, kg_, tmp_, ix_, row_);
-  convolve<std::uint8_t>(image, kg_, kd_, tmp_, iy_, row_);
-  for (int y = 0; y < height_; ++y) {
+  convolve<std::uint8_t>(image, kd_, kg_, ix_, executor);
+  convolve<std::uint8_t>(image, kg_, kd_, iy_, executor);
+  executor.parallelFor(n, [&](int i) {
+  for (int y = stripeBegin(i, n, height_); y < stripeBegin(i + 1, n, height_); ++y) {
     const float* gx = ix_.row(y);
     const float* gy = iy_.row(y);
     float* xx = ixx_.row(y);
@@ -105,13 +139,15 @@ Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<
       xy[x] = gx[x] * gy[x];
     }
   }
-  convolve<float>(ixx_.cview(), ki_, ki_, tmp_, ixx_, row_);
-  convolve<float>(iyy_.cview(), ki_, ki_, tmp_, iyy_, row_);
-  convolve<float>(ixy_.cview(), ki_, ki_, tmp_, ixy_, row_);
-  float max_r = 0;
+  });
+  convolve<float>(ixx_.cview(), ki_, ki_, ixx_, executor);
+  convolve<float>(iyy_.cview(), ki_, ki_, iyy_, executor);
+  convolve<float>(ixy_.cview(), ki_, ki_, ixy_, executor);
   const bool harris = params_.response == CornerResponse::kHarris;
   const double k = params_.harris_k;
-  for (int y = 0; y < height_; ++y) {
+  executor.parallelFor(n, [&](int i) {
+  float max_r = 0;
+  for (int y = stripeBegin(i, n, height_); y < stripeBegin(i + 1, n, height_); ++y) {
     const float* ra = ixx_.row(y);
     const float* rb = ixy_.row(y);
     const float* rc = iyy_.row(y);
@@ -124,6 +160,10 @@ Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<
       max_r = std::max(max_r, rr[x]);
     }
   }
+  stripe_max_[static_cast<std::size_t>(i)] = max_r;
+  });
+  float max_r = 0;  // max is exact: the same for any stripes
+  for (float m : stripe_max_) max_r = std::max(max_r, m);
   max_response_ = max_r;
   if (!(max_r > 0)) return Status::ok();  // flat image: no corner
   const float thr = static_cast<float>(params_.threshold_rel) * max_r;

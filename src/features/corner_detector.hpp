@@ -11,6 +11,7 @@
 // Positions are refined to sub-pixel by fitting a parabola to the response in x and in y.
 #include <vector>
 
+#include "core/executor.hpp"
 #include "core/image.hpp"
 #include "core/status.hpp"
 
@@ -43,6 +44,11 @@ class CornerDetector {
   const Status& initStatus() const { return init_status_; }
   // Corners of `image` (width x height), strongest first within each cell, cells row-major.
   Status process(ImageView<const std::uint8_t> image, std::vector<Corner>& out);
+  // The same with the filtering and the response computed over row stripes on `executor`
+  // (each output value is computed by the same operations whatever the stripe: the corners
+  // are identical for any number of stripes).
+  Status process(ImageView<const std::uint8_t> image, std::vector<Corner>& out,
+                 Executor& executor);
   // Largest response of the last processed image (0 for a flat one).
   float lastMaxResponse() const { return max_response_; }
 
@@ -53,7 +59,12 @@ class CornerDetector {
   float max_response_ = 0;
   std::vector<float> kd_, kg_, ki_;  // derivative, smoothing and integration kernels
   ImageF32 tmp_, ix_, iy_, ixx_, iyy_, ixy_, resp_;
-  std::vector<float> row_;  // padded row of the horizontal convolution
+  // Separable convolution of `in` into `out` through tmp_, rows split over the executor.
+  template <class T>
+  void convolve(ImageView<const T> in, const std::vector<float>& kx, const std::vector<float>& ky,
+                ImageF32& out, Executor& executor);
+  std::vector<std::vector<float>> rows_;  // per stripe: padded row of the horizontal pass
+  std::vector<float> stripe_max_;         // per stripe: largest response
   std::vector<std::vector<Corner>> cells_;  // bucketing grid, capacity kept between frames
 };
 

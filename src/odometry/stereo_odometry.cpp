@@ -152,7 +152,6 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
                                 ImageView<const std::uint8_t> right,
                                 const StereoStageOutput& stereo, OdometryFrameResult& out,
                                 Executor& executor, StageObserver* observer) {
-  (void)executor;
   if (!init_status_) return init_status_;
   if (left.width != calib_.width || left.height != calib_.height || right.width != calib_.width ||
       right.height != calib_.height)
@@ -177,7 +176,7 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
   have_rois_ = false;
   const bool roi_mode = !stereo.matched;
   if (roi_mode) {  // detection and matching depend on the previous frame's clusters
-    if (Status s = stage_.detect(left, own_); !s) return s;
+    if (Status s = stage_.detect(left, own_, executor); !s) return s;
     if (clusterer_ && has_prev_ && !prev_clusters_.empty()) applyRois(out);
     done("detect");
     ImageView<const float> prior;

@@ -59,7 +59,7 @@ Status StereoStage::process(ImageView<const std::uint8_t> left,
     if (observer) observer->stageDone("dense_stereo");
   }
   if (params_.roi_tracking) return Status::ok();
-  if (Status s = detect(left, out); !s) return s;
+  if (Status s = detect(left, out, executor); !s) return s;
   if (observer) observer->stageDone("detect");
   ImageView<const float> prior;
   if (out.has_disparity) prior = out.disparity.disparity_px.cview();
@@ -69,7 +69,8 @@ Status StereoStage::process(ImageView<const std::uint8_t> left,
   return Status::ok();
 }
 
-Status StereoStage::detect(ImageView<const std::uint8_t> left, StereoStageOutput& out) {
+Status StereoStage::detect(ImageView<const std::uint8_t> left, StereoStageOutput& out,
+                           Executor& executor) {
   if (!init_status_) return init_status_;
   out.corner_px.clear();
   out.corner_resp.clear();
@@ -82,7 +83,7 @@ Status StereoStage::detect(ImageView<const std::uint8_t> left, StereoStageOutput
     }
     return Status::ok();
   }
-  if (Status s = detector_.process(left, corners_); !s) return s;
+  if (Status s = detector_.process(left, corners_, executor); !s) return s;
   for (const Corner& c : corners_) {
     out.corner_px.emplace_back(c.x_px, c.y_px);
     out.corner_resp.push_back(c.response);

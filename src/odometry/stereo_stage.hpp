@@ -52,8 +52,9 @@ class StereoStage {
   // "detect" and "stereo_match". Images of the calibration size.
   Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                  StereoStageOutput& out, Executor& executor, StageObserver* observer = nullptr);
-  // Step 2 alone: fills corner_px, corner_resp, max_response.
-  Status detect(ImageView<const std::uint8_t> left, StereoStageOutput& out);
+  // Step 2 alone: fills corner_px, corner_resp, max_response. The corner filtering runs over
+  // row stripes on `executor` (same corners for any executor).
+  Status detect(ImageView<const std::uint8_t> left, StereoStageOutput& out, Executor& executor);
   // Step 3 alone over out.corner_px; `prior` is the dense disparity (empty view: none) and
   // `ranges` (optional, one per point) bound the disparity search (ROI tracking).
   Status match(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,

@@ -3,7 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
+#include <thread>
+#include <vector>
 
 namespace svslam {
 namespace {
@@ -91,6 +95,62 @@ TEST(CornerDetector, BucketingCapsEachCellAndFlatImagesHaveNoCorners) {
   bad.harris_k = 1.0;
   EXPECT_FALSE(CornerDetector(bad, 200, 150).initStatus().isOk());
   EXPECT_FALSE(CornerDetector(CornerParams{}, 10, 10).initStatus().isOk());
+}
+
+}  // namespace
+}  // namespace svslam
+
+namespace svslam {
+namespace {
+
+// Runs the tasks concurrently on their own threads, last first (any order must give the same).
+class SpawningExecutor final : public Executor {
+ public:
+  explicit SpawningExecutor(int n) : n_(n) {}
+  void parallelFor(int num_tasks, const std::function<void(int)>& fn) override {
+    std::vector<std::thread> t;
+    for (int i = num_tasks - 1; i >= 0; --i) t.emplace_back(fn, i);
+    for (auto& th : t) th.join();
+  }
+  int concurrency() const override { return n_; }
+
+ private:
+  int n_;
+};
+
+TEST(CornerDetector, RowStripesOnAnyExecutorGiveIdenticalCorners) {
+  // A textured image with odd size: random smooth blobs.
+  const int w = 203, h = 151;
+  ImageU8 img(w, h);
+  std::uint32_t s = 12345;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      s = s * 1664525u + 1013904223u;
+      const double v = 128 + 60 * std::sin(x * 0.21 + 0.3 * y) * std::cos(y * 0.17 - 0.1 * x) +
+                       static_cast<double>(s >> 28);
+      img.row(y)[x] = static_cast<std::uint8_t>(std::clamp(v, 0.0, 255.0));
+    }
+  for (CornerResponse resp : {CornerResponse::kHarris, CornerResponse::kShiTomasi}) {
+    CornerParams p;
+    p.response = resp;
+    CornerDetector serial(p, w, h);
+    std::vector<Corner> ref;
+    ASSERT_TRUE(serial.process(img.cview(), ref).isOk());
+    ASSERT_GT(ref.size(), 20u);
+    for (int n : {2, 3, 8}) {
+      CornerDetector striped(p, w, h);
+      SpawningExecutor ex(n);
+      std::vector<Corner> got;
+      ASSERT_TRUE(striped.process(img.cview(), got, ex).isOk());
+      ASSERT_EQ(got.size(), ref.size()) << n;
+      for (std::size_t i = 0; i < ref.size(); ++i) {
+        EXPECT_EQ(got[i].x_px, ref[i].x_px);
+        EXPECT_EQ(got[i].y_px, ref[i].y_px);
+        EXPECT_EQ(got[i].response, ref[i].response);
+      }
+      EXPECT_EQ(striped.lastMaxResponse(), serial.lastMaxResponse());
+    }
+  }
 }
 
 }  // namespace
