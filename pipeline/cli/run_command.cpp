@@ -51,8 +51,8 @@ Status applyOverrides(const ArgParser& p, config::RunConfig& cfg) {
     if (cfg.mode != "ekf" && cfg.mode != "vo")
       return Status::invalidArgument("--mode: unknown mode '" + cfg.mode + "' (use ekf or vo)");
   }
-  if (p.has("sequential")) cfg.pipeline.sequential = true;
-  if (p.has("preload")) cfg.pipeline.preload = true;
+  if (p.flag("sequential")) cfg.pipeline.sequential = true;
+  if (p.flag("preload")) cfg.pipeline.preload = true;
   if (p.has("rate")) {
     auto r = p.getDouble("rate");
     if (!r) return r.status();

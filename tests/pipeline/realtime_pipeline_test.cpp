@@ -288,6 +288,9 @@ TEST(RunPipeline, ThreadedOutputsEqualSequentialOnAReplay) {
       EXPECT_EQ(slurp(a / "pose_covariance.txt"), slurp(b / "pose_covariance.txt"));
       EXPECT_EQ(slurp(a / "landmarks.ply"), slurp(b / "landmarks.ply"));
     }
+    // The two runs really were threaded and sequential.
+    EXPECT_NE(slurp(a / "stdout.txt").find("\"threaded\": true"), std::string::npos);
+    EXPECT_NE(slurp(b / "stdout.txt").find("\"threaded\": false"), std::string::npos);
     const std::string stats = slurp(a / "stats.json");
     EXPECT_NE(stats.find("\"end_to_end\""), std::string::npos);
     EXPECT_NE(stats.find("\"frames_dropped\": 0"), std::string::npos);
