@@ -184,13 +184,11 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
   LatencyRecorder rec_capture, rec_stereo, rec_estimate, rec_publish, rec_e2e;
   std::mutex error_mutex;
   Status first_error;
-  std::atomic<bool> errored{false};
   std::atomic<std::int64_t> failed{0};
   std::atomic<int> running{4};
   auto fail = [&](const Status& s) {
     std::lock_guard<std::mutex> lock(error_mutex);
     if (first_error) first_error = s;
-    errored = true;
     control.stop = true;
   };
 
@@ -257,11 +255,14 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
   auto stage = [&](const char* name, auto pop, BlockingEdge<FrameSlot>& out, auto fn,
                    LatencyRecorder& rec, std::int64_t FrameStamps::*a, std::int64_t FrameStamps::*b) {
     work_.onThreadStart(name);
+    // Frames ahead of a failure (already past this stage) are still published; after this
+    // stage fails, every later frame is skipped here and downstream.
+    bool this_stage_failed = false;
     for (;;) {
       FrameSlot* slot = nullptr;
       if (!pop(slot)) continue;
       if (!slot) break;
-      if (!slot->failed && errored.load()) slot->failed = true;  // after an error: skip
+      if (this_stage_failed) slot->failed = true;
       if (!slot->failed) {
         slot->stamps.*a = steadyNowNs();
         Status s = fn(*slot);
@@ -269,6 +270,7 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
         rec.add(slot->stamps.*b - slot->stamps.*a);
         if (!s) {
           slot->failed = true;
+          this_stage_failed = true;
           fail(s);
         }
       }
@@ -292,16 +294,19 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
   });
   std::thread publisher([&] {
     work_.onThreadStart("publisher");
+    bool publish_failed = false;
     for (;;) {
       FrameSlot* slot = nullptr;
       if (!to_publisher.pop(slot, kPollTimeout)) continue;
       if (!slot) break;
-      if (!slot->failed && !errored.load()) {
+      if (publish_failed) slot->failed = true;
+      if (!slot->failed) {
         slot->stamps.publish_start_ns = steadyNowNs();
         Status s = work_.publish(*slot);
         slot->stamps.published_ns = steadyNowNs();
         rec_publish.add(slot->stamps.published_ns - slot->stamps.publish_start_ns);
         if (!s) {
+          publish_failed = true;
           fail(s);
           failed.fetch_add(1);
         } else {

@@ -103,6 +103,8 @@ class ScriptedWork : public PipelineWork {
       : frames_(frames), stereo_cost_(stereo_cost) {}
   Result<bool> capture(FrameSlot& slot) override {
     if (next_ >= frames_) return false;
+    if (capture_fail_at_ >= 0 && next_ == capture_fail_at_)
+      return Status::corruptData("scripted unreadable frame");
     slot.frame.index = next_;
     slot.frame.t_ns = 1000 * static_cast<TimeNs>(next_);
     slot.frame.left.resize(8, 4);
@@ -126,6 +128,7 @@ class ScriptedWork : public PipelineWork {
     return Status::ok();
   }
   int fail_at_ = -1;
+  int capture_fail_at_ = -1;
   std::vector<std::pair<int, int>> published_;
 
  private:
@@ -234,6 +237,24 @@ TEST(PipelineRunner, StageErrorStopsTheRunAndIsReported) {
     EXPECT_NE(s.message().find("scripted failure"), std::string::npos);
     ASSERT_EQ(work.published_.size(), 40u) << "sequential " << sequential;
     EXPECT_EQ(work.published_.back().first, 39);
+  }
+}
+
+TEST(PipelineRunner, CaptureErrorKeepsEveryFrameBeforeIt) {
+  // Nothing already computed is lost: the frames in flight behind an unreadable frame are
+  // still estimated and published.
+  for (bool sequential : {false, true}) {
+    PipelineOptions o;
+    o.sequential = sequential;
+    ScriptedWork work(100);
+    work.capture_fail_at_ = 30;
+    PipelineRunner runner(o, work);
+    PipelineControl control;
+    auto slots = makeSlots(o);
+    const Status s = runner.run(slots, control, nullptr);
+    EXPECT_NE(s.message().find("scripted unreadable frame"), std::string::npos);
+    ASSERT_EQ(work.published_.size(), 30u) << "sequential " << sequential;
+    EXPECT_EQ(work.published_.back().first, 29);
   }
 }
 
