@@ -2,7 +2,9 @@
 // lanes per step elsewhere, scalar tails. Bit-exact with stereo_kernels_scalar.cpp.
 #include <immintrin.h>
 
+#include <array>
 #include <cstdlib>
+#include <utility>
 
 #include "simd/stereo_kernels.hpp"
 
@@ -154,7 +156,39 @@ void addSubRow(std::uint16_t* acc, const std::uint8_t* add, const std::uint8_t* 
   }
 }
 
+// Box of a fixed odd width K: one load plus K - 1 adds with memory operands per 16 outputs.
+template <int K>
+void boxFixed(const std::uint16_t* in, int width, std::uint16_t* out) {
+  int x = 0;
+  for (; x + 16 <= width; x += 16) {
+    __m256i s0 = loadu(in + x);
+    __m256i s1 = _mm256_setzero_si256();
+    for (int k = 1; k + 1 < K; k += 2) {  // two independent chains
+      s0 = _mm256_add_epi16(s0, loadu(in + x + k));
+      s1 = _mm256_add_epi16(s1, loadu(in + x + k + 1));
+    }
+    storeu(out + x, _mm256_add_epi16(s0, s1));
+  }
+  for (; x < width; ++x) {
+    std::uint16_t s = 0;
+    for (int k = 0; k < K; ++k) s = static_cast<std::uint16_t>(s + in[x + k]);
+    out[x] = s;
+  }
+}
+
+using BoxFn = void (*)(const std::uint16_t*, int, std::uint16_t*);
+template <int... K>
+constexpr auto boxTable(std::integer_sequence<int, K...>) {
+  return std::array<BoxFn, sizeof...(K)>{&boxFixed<2 * K + 1>...};
+}
+// boxFixed<2j + 1> for j = 0 .. 15, i.e. every odd width 1..31 the stage accepts.
+constexpr auto kBoxFns = boxTable(std::make_integer_sequence<int, 16>{});
+
 void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
+  if (win_w % 2 == 1 && win_w <= 31) {
+    kBoxFns[static_cast<std::size_t>(win_w / 2)](in, width, out);
+    return;
+  }
   int x = 0;
   for (; x + 16 <= width; x += 16) {
     __m256i s0 = _mm256_setzero_si256();
@@ -175,54 +209,65 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
 }
 
 // The left state of 16 columns stays in registers across the planes; the branches of the
-// reference become blends. Compared values (best, second, pm1, pm2, costs) are held biased by
-// xor 0x8000 so that signed compares order them as uint16.
+// reference become blends on unsigned minima (no bias needed):
+//   bn = min(best, c); keep = (bn == best), i.e. not c < best
+//   adj = (bidx == i - 1)                 (tested on the old bidx, as the reference does)
+//   second = keep ? min(second, adj ? 0xFFFF : c) : pm2
+//   bidx, cm = keep ? (bidx, cm) : (i, prev);  cp = keep ? (adj ? c : cp) : 0xFFFF
+// Left state of 16 columns at x; plane p is the row agg + p * stride (agg - stride: plane i0 - 1).
+inline void wtaLeftBlock(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0,
+                         std::uint16_t* best_p, std::int16_t* bidx_p, std::uint16_t* second_p,
+                         std::uint16_t* cm_p, std::uint16_t* cp_p, std::uint16_t* pm1_p,
+                         std::uint16_t* pm2_p) {
+  const __m256i one = _mm256_set1_epi16(1);
+  __m256i best = loadu(best_p);
+  __m256i second = loadu(second_p);
+  __m256i pm1 = loadu(pm1_p);
+  __m256i pm2 = loadu(pm2_p);
+  __m256i bidx = loadu(bidx_p);
+  __m256i cm = loadu(cm_p);
+  __m256i cp = loadu(cp_p);
+  __m256i prev = loadu(agg - stride);
+  // i < 1024 (numDisp <= 1024), so i and i - 1 fit int16 lanes.
+  __m256i vim1 = _mm256_set1_epi16(static_cast<short>(i0 - 1));
+  const std::uint16_t* const end = agg + n_planes * stride;
+  for (const std::uint16_t* a = agg; a != end; a += stride) {
+    const __m256i vi = _mm256_add_epi16(vim1, one);
+    const __m256i c = loadu(a);
+    const __m256i bn = _mm256_min_epu16(best, c);
+    const __m256i keep = _mm256_cmpeq_epi16(bn, best);
+    const __m256i adj = _mm256_cmpeq_epi16(bidx, vim1);
+    second = _mm256_blendv_epi8(pm2, _mm256_min_epu16(second, _mm256_or_si256(c, adj)), keep);
+    bidx = _mm256_blendv_epi8(vi, bidx, keep);
+    cm = _mm256_blendv_epi8(prev, cm, keep);
+    cp = _mm256_blendv_epi8(_mm256_set1_epi16(-1), _mm256_blendv_epi8(cp, c, adj), keep);
+    best = bn;
+    pm2 = pm1;
+    pm1 = _mm256_min_epu16(pm1, c);
+    prev = c;
+    vim1 = vi;
+  }
+  storeu(best_p, best);
+  storeu(second_p, second);
+  storeu(pm1_p, pm1);
+  storeu(pm2_p, pm2);
+  storeu(bidx_p, bidx);
+  storeu(cm_p, cm);
+  storeu(cp_p, cp);
+}
+
 void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int width,
                    int d0, const WtaRowState& s) {
-  const __m256i sign = _mm256_set1_epi16(static_cast<short>(0x8000));
-  const __m256i ones = _mm256_set1_epi16(-1);
   int x = 0;
-  for (; x + 16 <= width; x += 16) {
-    __m256i best = _mm256_xor_si256(loadu(s.best + x), sign);
-    __m256i second = _mm256_xor_si256(loadu(s.second + x), sign);
-    __m256i pm1 = _mm256_xor_si256(loadu(s.pm1 + x), sign);
-    __m256i pm2 = _mm256_xor_si256(loadu(s.pm2 + x), sign);
-    __m256i bidx = loadu(s.bidx + x);
-    __m256i cm = loadu(s.cm + x);
-    __m256i cp = loadu(s.cp + x);
-    __m256i prev = loadu(agg - stride + x);
-    for (int p = 0; p < n_planes; ++p) {
-      const int i = i0 + p;
-      const __m256i c = loadu(agg + p * stride + x);
-      const __m256i cb = _mm256_xor_si256(c, sign);
-      const __m256i m_new = _mm256_cmpgt_epi16(best, cb);  // c < best
-      // i == bidx + 1, as int: no int16 bidx matches when i - 1 > 32767.
-      const __m256i eq_adj =
-          i - 1 > 32767 ? _mm256_setzero_si256()
-                        : _mm256_cmpeq_epi16(bidx, _mm256_set1_epi16(static_cast<short>(i - 1)));
-      const __m256i m_adj = _mm256_andnot_si256(m_new, eq_adj);
-      const __m256i m_sec =
-          _mm256_andnot_si256(_mm256_or_si256(m_new, m_adj), _mm256_cmpgt_epi16(second, cb));
-      second = _mm256_blendv_epi8(_mm256_blendv_epi8(second, pm2, m_new), cb, m_sec);
-      best = _mm256_min_epi16(best, cb);
-      bidx = _mm256_blendv_epi8(bidx, _mm256_set1_epi16(static_cast<short>(i)), m_new);
-      cm = _mm256_blendv_epi8(cm, prev, m_new);
-      cp = _mm256_blendv_epi8(_mm256_blendv_epi8(cp, ones, m_new), c, m_adj);
-      pm2 = pm1;
-      pm1 = _mm256_min_epi16(pm1, cb);
-      prev = c;
-    }
-    storeu(s.best + x, _mm256_xor_si256(best, sign));
-    storeu(s.second + x, _mm256_xor_si256(second, sign));
-    storeu(s.pm1 + x, _mm256_xor_si256(pm1, sign));
-    storeu(s.pm2 + x, _mm256_xor_si256(pm2, sign));
-    storeu(s.bidx + x, bidx);
-    storeu(s.cm + x, cm);
-    storeu(s.cp + x, cp);
+  if (n_planes > 0) {
+    for (; x + 16 <= width; x += 16)
+      wtaLeftBlock(agg + x, stride, n_planes, i0, s.best + x, s.bidx + x, s.second + x, s.cm + x,
+                   s.cp + x, s.pm1 + x, s.pm2 + x);
   }
   if (x < width) wtaLeftTail(agg, stride, n_planes, i0, x, width, s);
 
-  // Right image: plane i's candidate for right pixel xr is agg_i[xr + d0 + i].
+  // Right image: plane i's candidate for right pixel xr is agg_i[xr + d0 + i]; it wins when
+  // strictly below best_r, i.e. when min(best_r, c) differs from best_r.
   for (int p = 0; p < n_planes; ++p) {
     const int i = i0 + p;
     const int n_right = width - (d0 + i);
@@ -231,11 +276,11 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
     const __m256i vi = _mm256_set1_epi16(static_cast<short>(i));
     int xr = 0;
     for (; xr + 16 <= n_right; xr += 16) {
-      const __m256i c = loadu(a + xr);
       const __m256i br = loadu(s.best_r + xr);
-      const __m256i lt = _mm256_cmpgt_epi16(_mm256_xor_si256(br, sign), _mm256_xor_si256(c, sign));
-      storeu(s.best_r + xr, _mm256_blendv_epi8(br, c, lt));
-      storeu(s.idx_r + xr, _mm256_blendv_epi8(loadu(s.idx_r + xr), vi, lt));
+      const __m256i nb = _mm256_min_epu16(br, loadu(a + xr));
+      const __m256i keep = _mm256_cmpeq_epi16(nb, br);
+      storeu(s.best_r + xr, nb);
+      storeu(s.idx_r + xr, _mm256_blendv_epi8(vi, loadu(s.idx_r + xr), keep));
     }
     wtaRightTail(a, xr, n_right, i, s);
   }
