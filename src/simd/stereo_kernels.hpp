@@ -45,6 +45,42 @@ void wtaLeftTail(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, 
 // plane's cost at x = xr + d0 + i) replaces best_r[xr] when strictly smaller.
 void wtaRightTail(const std::uint16_t* cand, int xr0, int n_right, int i, const WtaRowState& s);
 
+// Per-pixel verdict and sub-pixel refinement of one row (step 4-5 of dense_stereo.hpp), from
+// the final WTA state. For pixel x with i = bidx[x], d = d0 + i:
+//   failing tests, first one wins: no candidate (i < 0); low texture (low_texture[x] != 0, when
+//   low_texture is not null); not unique (uniqueness_pct > 0 and (second == 0xFFFF or
+//   100 second <= (100 + uniqueness_pct) best)); reverse correlation (lr_check and, with
+//   xr = clamp(x - d, 0, width - 1) and ir = idx_r[xr], ir < 0 or |ir - i| > lr_max_diff);
+//   parabola when 0 < i < num_disp - 1, cp != 0xFFFF and v = cm + cp - 2 best > 0;
+//   valid pixel: disp = d + (parabola and subpixel ? (cm - cp) / (2 v) : 0) (float division),
+//                sigma = sigma_by_denom[parabola ? min(v, max_denom) : 0],
+//                curv = parabola ? v * inv_area : 0;
+//   invalid pixel: disp = sigma = curv = +inf.
+// counts are incremented (never reset). Precondition: idx_r readable at [0, width + 1).
+struct FinalizeParams {
+  int num_disp;
+  int d0;
+  int uniqueness_pct;  // 0 disables the test
+  bool lr_check;
+  int lr_max_diff;
+  bool subpixel;
+  float inv_area;               // 1 / (window_w * window_h)
+  const float* sigma_by_denom;  // max_denom + 1 entries
+  int max_denom;
+};
+struct FinalizeCounts {
+  int no_candidate = 0;
+  int low_texture = 0;
+  int not_unique = 0;
+  int lr_inconsistent = 0;
+  int valid = 0;
+};
+
+// The scalar reference of finalizeRow on columns [x0, width) (vector bodies use it for tails).
+void finalizeRange(const WtaRowState& s, const std::uint8_t* low_texture, int x0, int width,
+                   const FinalizeParams& p, float* disp, float* sigma, float* curv,
+                   FinalizeCounts& counts);
+
 struct StereoKernels {
   Backend backend;
   const char* name;
@@ -77,12 +113,23 @@ struct StereoKernels {
   // i0 - 1 (0xFFFF-filled when i0 = 0). Right-image candidates of plane i start at x = d0 + i.
   void (*wtaUpdateRows)(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0,
                         int width, int d0, const WtaRowState& s);
+
+  // Step 4-5 for one row, as FinalizeParams documents (finalizeRange on [0, width)).
+  void (*finalizeRow)(const WtaRowState& s, const std::uint8_t* low_texture, int width,
+                      const FinalizeParams& p, float* disp, float* sigma, float* curv,
+                      FinalizeCounts& counts);
 };
 
 const StereoKernels& scalarKernels();
 // Backends compiled into this build (CMake defines SVSLAM_HAVE_<BACKEND> for the library).
 #if defined(SVSLAM_HAVE_AVX2)
 const StereoKernels& avx2Kernels();
+#endif
+#if defined(SVSLAM_HAVE_AVX2)
+// The AVX2 finalizeRow, shared with the AVX-512 table (8 float lanes suffice there too).
+void finalizeRowAvx2(const WtaRowState& s, const std::uint8_t* low_texture, int width,
+                     const FinalizeParams& p, float* disp, float* sigma, float* curv,
+                     FinalizeCounts& counts);
 #endif
 #if defined(SVSLAM_HAVE_AVX512)
 const StereoKernels& avx512Kernels();

@@ -217,9 +217,19 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
 
 }  // namespace
 
+namespace {
+// Step 4-5 stays on the scalar reference on ARM (per pixel, not per pixel-disparity).
+void finalizeRowNeon(const WtaRowState& s, const std::uint8_t* low_texture, int width,
+                     const FinalizeParams& p, float* disp, float* sigma, float* curv,
+                     FinalizeCounts& counts) {
+  finalizeRange(s, low_texture, 0, width, p, disp, sigma, curv, counts);
+}
+}  // namespace
+
 const StereoKernels& neonKernels() {
   static const StereoKernels k{Backend::kNeon, "neon",    censusRow, censusCostRow,
-                               sadCostRow,     addSubRow, boxRow,    wtaUpdateRows};
+                               sadCostRow,     addSubRow, boxRow,    wtaUpdateRows,
+                               finalizeRowNeon};
   return k;
 }
 

@@ -1,6 +1,8 @@
 // Scalar reference of the stereo row kernels. Plain loops, no intrinsics: this is the
 // definition every SIMD backend must reproduce bit for bit.
+#include <algorithm>
 #include <cstdlib>
+#include <limits>
 
 #include "simd/stereo_kernels.hpp"
 
@@ -31,7 +33,57 @@ void wtaRightTail(const std::uint16_t* cand, int xr0, int n_right, int i, const 
   }
 }
 
+void finalizeRange(const WtaRowState& s, const std::uint8_t* low_texture, int x0, int width,
+                   const FinalizeParams& p, float* disp, float* sigma, float* curv,
+                   FinalizeCounts& counts) {
+  const float inf = std::numeric_limits<float>::infinity();
+  const std::uint64_t uniq_factor = 100u + static_cast<std::uint32_t>(p.uniqueness_pct);
+  for (int x = x0; x < width; ++x) {
+    const int idx = s.bidx[x];
+    const std::uint32_t best = s.best[x];
+    const std::uint32_t second = s.second[x];
+    const bool no_candidate = idx < 0;
+    const bool low_tex = low_texture != nullptr && low_texture[x] != 0;
+    // No competitor at all (fewer than 3 candidates, at the left border) cannot be verified.
+    const bool not_unique =
+        p.uniqueness_pct > 0 &&
+        (second == 0xFFFF || static_cast<std::uint64_t>(second) * 100u <= best * uniq_factor);
+    const int xr = std::clamp(x - (p.d0 + idx), 0, width - 1);
+    const int idr = s.idx_r[xr];
+    const bool lr_bad = p.lr_check && (idr < 0 || std::abs(idr - idx) > p.lr_max_diff);
+    // The first failing test is the pixel's verdict.
+    if (no_candidate) {
+      ++counts.no_candidate;
+    } else if (low_tex) {
+      ++counts.low_texture;
+    } else if (not_unique) {
+      ++counts.not_unique;
+    } else if (lr_bad) {
+      ++counts.lr_inconsistent;
+    } else {
+      ++counts.valid;
+    }
+    const bool valid = !(no_candidate || low_tex || not_unique || lr_bad);
+    const int cm = s.cm[x];
+    const int cp = s.cp[x];
+    const int denom = cm + cp - 2 * static_cast<int>(best);
+    const bool parabola = idx > 0 && idx + 1 < p.num_disp && cp != 0xFFFF && denom > 0;
+    const float delta = parabola && p.subpixel
+                            ? static_cast<float>(cm - cp) / static_cast<float>(2 * denom)
+                            : 0.0f;
+    disp[x] = valid ? static_cast<float>(p.d0 + idx) + delta : inf;
+    sigma[x] = valid ? p.sigma_by_denom[parabola ? std::min(denom, p.max_denom) : 0] : inf;
+    curv[x] = valid ? (parabola ? static_cast<float>(denom) * p.inv_area : 0.0f) : inf;
+  }
+}
+
 namespace {
+
+void finalizeRow(const WtaRowState& s, const std::uint8_t* low_texture, int width,
+                 const FinalizeParams& p, float* disp, float* sigma, float* curv,
+                 FinalizeCounts& counts) {
+  finalizeRange(s, low_texture, 0, width, p, disp, sigma, curv, counts);
+}
 
 void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w, int win_h,
                std::uint64_t* out) {
@@ -114,7 +166,8 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
 
 const StereoKernels& scalarKernels() {
   static const StereoKernels k{Backend::kScalar, "scalar",  censusRow, censusCostRow,
-                               sadCostRow,       addSubRow, boxRow,    wtaUpdateRows};
+                               sadCostRow,       addSubRow, boxRow,    wtaUpdateRows,
+                               finalizeRow};
   return k;
 }
 

@@ -31,7 +31,8 @@ struct DenseStereo::Stripe {
   AlignedBuffer<std::uint16_t> agg;  // kPlaneBlock + 1 rows of agg_stride_: previous plane, block
   AlignedBuffer<std::uint16_t> best, second, cm, cp, pm1, pm2, best_r;
   AlignedBuffer<std::int16_t> bidx, idx_r;
-  std::vector<std::uint32_t> tex_col, tex_row;
+  std::vector<std::uint32_t> tex_col;
+  std::vector<std::uint8_t> low_texture;  // 1 where the window's mean gradient is too low
   std::vector<std::uint8_t> grad;
   std::vector<std::uint32_t> prefilter_scratch;  // column sums of the mean-removal prefilter
   DenseStereoStats stats;
@@ -111,9 +112,9 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
     for (auto* b : {&st->best, &st->second, &st->cm, &st->cp, &st->pm1, &st->pm2, &st->best_r})
       b->resize(wn);
     st->bidx.resize(wn);
-    st->idx_r.resize(wn);
+    st->idx_r.resize(wn + 16);  // finalizeRow reads idx_r at [0, width + 1)
     st->tex_col.assign(static_cast<std::size_t>(width), 0);
-    st->tex_row.assign(static_cast<std::size_t>(width), 0);
+    st->low_texture.assign(static_cast<std::size_t>(width), 0);
     st->grad.assign(static_cast<std::size_t>(width), 0);
     st->prefilter_scratch.assign(static_cast<std::size_t>(width + params_.prefilter_size), 0);
     stripes_.push_back(std::move(st));
@@ -201,14 +202,20 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
   const int rh = params_.window_h / 2;
   const int rw = params_.window_w / 2;
   const double area = static_cast<double>(params_.window_w) * params_.window_h;
-  const float inv_area = static_cast<float>(1.0 / area);
-  const int max_denom = static_cast<int>(sigma_by_denom_.size()) - 1;
   const bool use_texture = params_.texture_threshold > 0.0f;
   const double texture_limit = static_cast<double>(params_.texture_threshold) * 2.0 * area;
-  const float inf = std::numeric_limits<float>::infinity();
   std::fill(s.ring_row.begin(), s.ring_row.end(), -1);
-  DenseStereoStats counts;
-  int n_no_candidate = 0, n_low_texture = 0, n_not_unique = 0, n_lr = 0, n_valid = 0;
+  simd::FinalizeCounts counts;
+  simd::FinalizeParams fin{};
+  fin.num_disp = D;
+  fin.d0 = d0;
+  fin.uniqueness_pct = params_.uniqueness_pct;
+  fin.lr_check = params_.lr_check;
+  fin.lr_max_diff = params_.lr_max_diff;
+  fin.subpixel = params_.subpixel;
+  fin.inv_area = static_cast<float>(1.0 / area);
+  fin.sigma_by_denom = sigma_by_denom_.data();
+  fin.max_denom = static_cast<int>(sigma_by_denom_.size()) - 1;
 
   // Central-difference gradient |I(x+1) - I(x-1)| of left row r, for the texture filter.
   auto gradRow = [&](int r) {
@@ -290,63 +297,19 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
           sum += s.tex_col[static_cast<std::size_t>(std::min(x + rw, W - 1))];
           sum -= s.tex_col[static_cast<std::size_t>(std::max(x - rw - 1, 0))];
         }
-        s.tex_row[static_cast<std::size_t>(x)] = sum;
+        s.low_texture[static_cast<std::size_t>(x)] =
+            static_cast<std::uint8_t>(static_cast<double>(sum) < texture_limit);
       }
     }
     // 4-5. Filters and sub-pixel refinement.
-    float* disp = out.disparity_px.row(y);
-    float* sig = out.sigma_d_px.row(y);
-    float* curv = out.curvature.row(y);
-    // Branch-light: every test is evaluated and the first failing one (in the order no
-    // candidate, texture, uniqueness, reverse correlation) is the pixel's verdict.
-    const bool subpixel = params_.subpixel;
-    const float* const sigma_table = sigma_by_denom_.data();
-    const std::uint64_t uniq_factor = 100u + static_cast<std::uint32_t>(params_.uniqueness_pct);
-    for (int x = 0; x < W; ++x) {
-      const std::size_t ux = static_cast<std::size_t>(x);
-      const int idx = s.bidx[ux];
-      const std::uint32_t best = s.best[ux];
-      const std::uint32_t second = s.second[ux];
-      const bool no_candidate = idx < 0;
-      const bool low_texture = use_texture && static_cast<double>(s.tex_row[ux]) < texture_limit;
-      // No competitor at all (fewer than 3 candidates, at the left border) cannot be verified.
-      const bool not_unique = params_.uniqueness_pct > 0 &&
-                              (second == kImpossible ||
-                               static_cast<std::uint64_t>(second) * 100u <= best * uniq_factor);
-      const int xr = std::max(0, x - (d0 + idx));
-      const int idr = s.idx_r[static_cast<std::size_t>(xr)];
-      const bool lr_bad =
-          params_.lr_check && (idr < 0 || std::abs(idr - idx) > params_.lr_max_diff);
-      // First failing test, without branches: bit k set for test k. Counted in registers (an
-      // array of counters in memory serialises consecutive pixels through store forwarding).
-      const unsigned failed =
-          static_cast<unsigned>(no_candidate) | (static_cast<unsigned>(low_texture) << 1) |
-          (static_cast<unsigned>(not_unique) << 2) | (static_cast<unsigned>(lr_bad) << 3);
-      n_no_candidate += static_cast<int>(failed & 1u);
-      n_low_texture += static_cast<int>((failed & 3u) == 2u);
-      n_not_unique += static_cast<int>((failed & 7u) == 4u);
-      n_lr += static_cast<int>(failed == 8u);
-      n_valid += static_cast<int>(failed == 0u);
-      const int cm = s.cm[ux];
-      const int cp = s.cp[ux];
-      const int denom = cm + cp - 2 * static_cast<int>(best);
-      const bool parabola = idx > 0 && idx + 1 < D && cp != kImpossible && denom > 0;
-      const int safe_denom = parabola ? denom : 1;
-      const float delta = parabola && subpixel
-                              ? static_cast<float>(cm - cp) / static_cast<float>(2 * safe_denom)
-                              : 0.0f;
-      const bool valid = failed == 0;
-      disp[x] = valid ? static_cast<float>(d0 + idx) + delta : inf;
-      sig[x] = valid ? sigma_table[parabola ? std::min(denom, max_denom) : 0] : inf;
-      curv[x] = valid ? (parabola ? static_cast<float>(denom) * inv_area : 0.0f) : inf;
-    }
+    k_->finalizeRow(s.state(), use_texture ? s.low_texture.data() : nullptr, W, fin,
+                    out.disparity_px.row(y), out.sigma_d_px.row(y), out.curvature.row(y), counts);
   }
-  counts.no_candidate = n_no_candidate;
-  counts.low_texture = n_low_texture;
-  counts.not_unique = n_not_unique;
-  counts.lr_inconsistent = n_lr;
-  counts.valid = n_valid;
-  s.stats = counts;
+  s.stats.no_candidate = counts.no_candidate;
+  s.stats.low_texture = counts.low_texture;
+  s.stats.not_unique = counts.not_unique;
+  s.stats.lr_inconsistent = counts.lr_inconsistent;
+  s.stats.valid = counts.valid;
 }
 
 Status DenseStereo::process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -169,6 +170,7 @@ TEST_P(StereoKernelsTest, TableIsComplete) {
   EXPECT_NE(k_->addSubRow, nullptr);
   EXPECT_NE(k_->boxRow, nullptr);
   EXPECT_NE(k_->wtaUpdateRows, nullptr);
+  EXPECT_NE(k_->finalizeRow, nullptr);
 }
 
 TEST_P(StereoKernelsTest, CensusRowMatchesScalar) {
@@ -343,6 +345,77 @@ TEST_P(StereoKernelsTest, WtaUpdateRowsMatchesScalarFromAnyState) {
                     where("wtaUpdateRows any state", width, i0, n, d0, dist));
             if (HasFatalFailure()) return;
           }
+        }
+      }
+    }
+  }
+}
+
+// finalizeRow against the scalar reference: random final WTA states (no candidate, ties,
+// 0xFFFF markers, flat and negative parabolas), every filter switched on and off, a texture
+// mask or none; outputs compared bit for bit (float bits), counts exactly.
+TEST_P(StereoKernelsTest, FinalizeRowMatchesScalar) {
+  std::mt19937 rng(4242);
+  std::vector<float> sigma_table(301);
+  for (auto& v : sigma_table) v = static_cast<float>(rng() % 1000) / 997.0f;
+  for (int width : kWidths) {
+    for (int num_disp : {1, 3, 16, 64}) {
+      for (int d0 : kD0s) {
+        for (int variant = 0; variant < 16; ++variant) {
+          FinalizeParams p{};
+          p.num_disp = num_disp;
+          p.d0 = d0;
+          p.uniqueness_pct = (variant & 1) ? 10 : 0;
+          p.lr_check = (variant & 2) != 0;
+          p.lr_max_diff = (variant & 4) ? 1 : 0;
+          p.subpixel = (variant & 8) != 0;
+          p.inv_area = 1.0f / 81.0f;
+          p.sigma_by_denom = sigma_table.data();
+          p.max_denom = static_cast<int>(sigma_table.size()) - 1;
+          WtaBuffers st(width);
+          st.idx_r.resize(static_cast<std::size_t>(width) + 1);  // readable at [0, width + 1)
+          const auto draw_idx = [&]() {
+            const std::uint32_t r = rng() % 8;
+            return static_cast<std::int16_t>(r == 0 ? -1 : static_cast<int>(rng() % num_disp));
+          };
+          for (int x = 0; x < width; ++x) {
+            const std::size_t ux = static_cast<std::size_t>(x);
+            st.bidx[ux] = draw_idx();
+            st.best[ux] = static_cast<std::uint16_t>(rng() % 200);
+            const std::uint32_t r = rng();
+            st.second[ux] = (r % 7 == 0) ? std::uint16_t{0xFFFF}
+                                         : static_cast<std::uint16_t>(st.best[ux] + r % 40);
+            st.cm[ux] = (r % 5 == 0) ? std::uint16_t{0xFFFF}
+                                     : static_cast<std::uint16_t>(st.best[ux] + (r >> 8) % 200);
+            st.cp[ux] = (r % 11 == 0) ? std::uint16_t{0xFFFF}
+                                      : static_cast<std::uint16_t>(rng() % 400);
+          }
+          for (auto& e : st.idx_r) e = draw_idx();
+          std::vector<std::uint8_t> tex(static_cast<std::size_t>(width));
+          for (auto& e : tex) e = static_cast<std::uint8_t>(rng() % 5 == 0);
+          const std::uint8_t* low = (variant % 3 == 0) ? tex.data() : nullptr;
+          const std::size_t n = static_cast<std::size_t>(width);
+          std::vector<float> gd(n), gs(n), gc(n), wd(n), ws(n), wc(n);
+          FinalizeCounts gcnt, wcnt;
+          gcnt.valid = wcnt.valid = 7;  // counts are incremented, not reset
+          k_->finalizeRow(st.view(), low, width, p, gd.data(), gs.data(), gc.data(), gcnt);
+          ref_->finalizeRow(st.view(), low, width, p, wd.data(), ws.data(), wc.data(), wcnt);
+          const std::string ctx = where("finalizeRow", width, num_disp, d0, variant, Dist::kFull);
+          for (std::size_t x = 0; x < n; ++x) {
+            ASSERT_EQ(std::memcmp(&gd[x], &wd[x], sizeof(float)), 0)
+                << ctx << " disp x=" << x << " " << gd[x] << " vs " << wd[x];
+            ASSERT_EQ(std::memcmp(&gs[x], &ws[x], sizeof(float)), 0) << ctx << " sigma x=" << x;
+            ASSERT_EQ(std::memcmp(&gc[x], &wc[x], sizeof(float)), 0) << ctx << " curv x=" << x;
+          }
+          EXPECT_EQ(gcnt.no_candidate, wcnt.no_candidate) << ctx;
+          EXPECT_EQ(gcnt.low_texture, wcnt.low_texture) << ctx;
+          EXPECT_EQ(gcnt.not_unique, wcnt.not_unique) << ctx;
+          EXPECT_EQ(gcnt.lr_inconsistent, wcnt.lr_inconsistent) << ctx;
+          EXPECT_EQ(gcnt.valid, wcnt.valid) << ctx;
+          EXPECT_EQ(wcnt.no_candidate + wcnt.low_texture + wcnt.not_unique +
+                        wcnt.lr_inconsistent + wcnt.valid,
+                    width + 7)
+              << ctx;
         }
       }
     }
