@@ -156,38 +156,60 @@ inline void transposeStore(const __m256i* pl, std::uint64_t* out) {
   storeu(out + 28, _mm256_permute2x128_si256(w6, w7, 0x31));
 }
 
-void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w, int win_h,
-               std::uint64_t* out) {
-  const int cx = win_w / 2;
-  const int cy = win_h / 2;
-  const __m256i bias = _mm256_set1_epi8(static_cast<char>(0x80));
-  int x = 0;
-  for (; x + 32 <= width; x += 32) {
-    // Unsigned a < b as signed compare of (a ^ 0x80) and (b ^ 0x80).
-    const __m256i c = _mm256_xor_si256(loadu(win + cy * stride + cx + x), bias);
-    __m256i planes[8];
-    for (__m256i& p : planes) p = _mm256_setzero_si256();
-    __m256i acc = _mm256_setzero_si256();
-    int k = 0;
-    for (int dy = 0; dy < win_h; ++dy) {
-      const std::uint8_t* r = win + dy * stride + x;
-      for (int dx = 0; dx < win_w; ++dx) {
-        if (dy == cy && dx == cx) continue;
-        const __m256i lt = _mm256_cmpgt_epi8(c, _mm256_xor_si256(loadu(r + dx), bias));
-        acc = _mm256_sub_epi8(_mm256_add_epi8(acc, acc), lt);  // acc = acc << 1 | (nb < c)
-        if ((++k & 7) == 0) {
-          planes[(k >> 3) - 1] = acc;
-          acc = _mm256_setzero_si256();
-        }
+// 32 pixels of a census row; W, H are compile-time window sides in the unrolled instances and
+// 0 in the generic one (then win_w, win_h are used). Bit "neighbour < centre" enters the low end
+// of a byte accumulator as acc = 2 acc + 1 + m with m = -1 when max(nb, c) == nb (nb >= c);
+// the 1s of 8 steps sum to 255, so acc is kept without them and 255 is added per full byte.
+template <int W, int H>
+inline void census32(const std::uint8_t* win, std::ptrdiff_t stride, int win_w, int win_h,
+                     std::uint64_t* out) {
+  const int ww = W > 0 ? W : win_w;
+  const int wh = H > 0 ? H : win_h;
+  const int cx = ww / 2;
+  const int cy = wh / 2;
+  const __m256i c = loadu(win + cy * stride + cx);
+  const __m256i ff = _mm256_set1_epi8(-1);
+  __m256i planes[8];
+  for (__m256i& p : planes) p = _mm256_setzero_si256();
+  __m256i acc = _mm256_setzero_si256();
+  int k = 0;
+  for (int dy = 0; dy < wh; ++dy) {
+    const std::uint8_t* r = win + dy * stride;
+    for (int dx = 0; dx < ww; ++dx) {
+      if (dy == cy && dx == cx) continue;
+      const __m256i nb = loadu(r + dx);
+      const __m256i ge = _mm256_cmpeq_epi8(_mm256_max_epu8(nb, c), nb);
+      acc = _mm256_add_epi8(_mm256_add_epi8(acc, acc), ge);
+      if ((++k & 7) == 0) {
+        planes[(k >> 3) - 1] = _mm256_add_epi8(acc, ff);  // + 255 (mod 256)
+        acc = _mm256_setzero_si256();
       }
     }
-    if ((k & 7) != 0) {  // partial last plane: move its first offset up to bit 7
-      for (int s = k & 7; s < 8; ++s) acc = _mm256_add_epi8(acc, acc);
-      planes[k >> 3] = acc;
-    }
-    transposeStore(planes, out + x);
   }
+  if ((k & 7) != 0) {  // partial last plane: its ones sum to 2^n - 1; then shift up to bit 7
+    acc = _mm256_add_epi8(acc, _mm256_set1_epi8(static_cast<char>((1 << (k & 7)) - 1)));
+    for (int s = k & 7; s < 8; ++s) acc = _mm256_add_epi8(acc, acc);
+    planes[k >> 3] = acc;
+  }
+  transposeStore(planes, out);
+}
+
+template <int W, int H>
+void censusRowT(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w, int win_h,
+                std::uint64_t* out) {
+  int x = 0;
+  for (; x + 32 <= width; x += 32) census32<W, H>(win + x, stride, win_w, win_h, out + x);
   if (x < width) scalarKernels().censusRow(win + x, stride, width - x, win_w, win_h, out + x);
+}
+
+void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w, int win_h,
+               std::uint64_t* out) {
+  // Fully unrolled for the windows the stage is used with; any other size takes the loop.
+  if (win_w == 9 && win_h == 7) return censusRowT<9, 7>(win, stride, width, win_w, win_h, out);
+  if (win_w == 7 && win_h == 9) return censusRowT<7, 9>(win, stride, width, win_w, win_h, out);
+  if (win_w == 7 && win_h == 7) return censusRowT<7, 7>(win, stride, width, win_w, win_h, out);
+  if (win_w == 5 && win_h == 5) return censusRowT<5, 5>(win, stride, width, win_w, win_h, out);
+  censusRowT<0, 0>(win, stride, width, win_w, win_h, out);
 }
 
 // Population count of each 64-bit element (in its low 16 bits, the rest zero).
@@ -335,6 +357,7 @@ inline void wtaLeftBlock(const std::uint16_t* agg, std::ptrdiff_t stride, int n_
   // i < 1024 (numDisp <= 1024), so i and i - 1 fit int16 lanes.
   __m256i vim1 = _mm256_set1_epi16(static_cast<short>(i0 - 1));
   const std::uint16_t* const end = agg + n_planes * stride;
+#pragma GCC unroll 4
   for (const std::uint16_t* a = agg; a != end; a += stride) {
     const __m256i vi = _mm256_add_epi16(vim1, one);
     const __m256i c = loadu(a);
@@ -371,14 +394,34 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
   if (x < width) wtaLeftTail(agg, stride, n_planes, i0, x, width, s);
 
   // Right image: plane i's candidate for right pixel xr is agg_i[xr + d0 + i]; it wins when
-  // strictly below best_r, i.e. when min(best_r, c) differs from best_r.
+  // strictly below best_r, i.e. when min(best_r, c) differs from best_r. Right pixels that
+  // every plane of the block reaches keep best_r / idx_r in registers across the planes; the
+  // rest (near the right end, fewer planes) go plane by plane.
+  if (n_planes <= 0) return;
+  const int n_common = width - (d0 + i0 + n_planes - 1);  // right pixels all planes reach
+  const __m256i one = _mm256_set1_epi16(1);
+  int xr_common = 0;
+  for (; xr_common + 16 <= n_common; xr_common += 16) {
+    __m256i br = loadu(s.best_r + xr_common);
+    __m256i ir = loadu(s.idx_r + xr_common);
+    __m256i vi = _mm256_set1_epi16(static_cast<short>(i0));
+    const std::uint16_t* a = agg + (d0 + i0) + xr_common;
+    for (int p = 0; p < n_planes; ++p, a += stride + 1) {
+      const __m256i nb = _mm256_min_epu16(br, loadu(a));
+      ir = _mm256_blendv_epi8(vi, ir, _mm256_cmpeq_epi16(nb, br));
+      br = nb;
+      vi = _mm256_add_epi16(vi, one);
+    }
+    storeu(s.best_r + xr_common, br);
+    storeu(s.idx_r + xr_common, ir);
+  }
   for (int p = 0; p < n_planes; ++p) {
     const int i = i0 + p;
     const int n_right = width - (d0 + i);
-    if (n_right <= 0) continue;
+    if (n_right <= xr_common) continue;
     const std::uint16_t* a = agg + p * stride + (d0 + i);
     const __m256i vi = _mm256_set1_epi16(static_cast<short>(i));
-    int xr = 0;
+    int xr = xr_common;
     for (; xr + 16 <= n_right; xr += 16) {
       const __m256i br = loadu(s.best_r + xr);
       const __m256i nb = _mm256_min_epu16(br, loadu(a + xr));
