@@ -118,6 +118,22 @@ struct StereoKernels {
   void (*finalizeRow)(const WtaRowState& s, const std::uint8_t* low_texture, int width,
                       const FinalizeParams& p, float* disp, float* sigma, float* curv,
                       FinalizeCounts& counts);
+
+  // Optional pair (null in backends without it; the stage then uses censusRow and
+  // censusCostRow): census words in byte-plane layout. Plane j (0..7) holds byte 7 - j of every
+  // pixel's word, i.e. census offsets 8j .. 8j + 7 with offset 8j in bit 7:
+  // out[j * plane_stride + x], x in [0, width). Same window preconditions as censusRow.
+  void (*censusPlanesRow)(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
+                          int win_h, std::uint8_t* out, std::ptrdiff_t plane_stride);
+  // Cost planes of n_d disparities d = d_first + k, k in [0, n_d), written to
+  // cost[k * cost_stride + x] for x in [0, width):
+  //   sum_{j < n_planes} popcount(left[j ps + x] ^ right[j ps + x - d]), ps = plane_stride,
+  // n_planes in 1..8 (planes j >= ceil((win_w win_h - 1) / 8) are all zero, so the Hamming
+  // distance of the words needs only the first ones). Precondition: each right plane readable
+  // at [-(d_first + n_d - 1), width - d_first).
+  void (*censusPlanesCostRows)(const std::uint8_t* left, const std::uint8_t* right,
+                               std::ptrdiff_t plane_stride, int n_planes, int width, int d_first,
+                               int n_d, std::uint8_t* cost, std::ptrdiff_t cost_stride);
 };
 
 const StereoKernels& scalarKernels();

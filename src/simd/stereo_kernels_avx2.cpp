@@ -161,16 +161,15 @@ inline void transposeStore(const __m256i* pl, std::uint64_t* out) {
 // of a byte accumulator as acc = 2 acc + 1 + m with m = -1 when max(nb, c) == nb (nb >= c);
 // the 1s of 8 steps sum to 255, so acc is kept without them and 255 is added per full byte.
 template <int W, int H>
-inline void census32(const std::uint8_t* win, std::ptrdiff_t stride, int win_w, int win_h,
-                     std::uint64_t* out) {
+inline void census32Planes(const std::uint8_t* win, std::ptrdiff_t stride, int win_w, int win_h,
+                           __m256i* planes) {
   const int ww = W > 0 ? W : win_w;
   const int wh = H > 0 ? H : win_h;
   const int cx = ww / 2;
   const int cy = wh / 2;
   const __m256i c = loadu(win + cy * stride + cx);
   const __m256i ff = _mm256_set1_epi8(-1);
-  __m256i planes[8];
-  for (__m256i& p : planes) p = _mm256_setzero_si256();
+  for (int j = 0; j < 8; ++j) planes[j] = _mm256_setzero_si256();
   __m256i acc = _mm256_setzero_si256();
   int k = 0;
   for (int dy = 0; dy < wh; ++dy) {
@@ -191,6 +190,13 @@ inline void census32(const std::uint8_t* win, std::ptrdiff_t stride, int win_w, 
     for (int s = k & 7; s < 8; ++s) acc = _mm256_add_epi8(acc, acc);
     planes[k >> 3] = acc;
   }
+}
+
+template <int W, int H>
+inline void census32(const std::uint8_t* win, std::ptrdiff_t stride, int win_w, int win_h,
+                     std::uint64_t* out) {
+  __m256i planes[8];
+  census32Planes<W, H>(win, stride, win_w, win_h, planes);
   transposeStore(planes, out);
 }
 
@@ -210,6 +216,79 @@ void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int wi
   if (win_w == 7 && win_h == 7) return censusRowT<7, 7>(win, stride, width, win_w, win_h, out);
   if (win_w == 5 && win_h == 5) return censusRowT<5, 5>(win, stride, width, win_w, win_h, out);
   censusRowT<0, 0>(win, stride, width, win_w, win_h, out);
+}
+
+template <int W, int H>
+void censusPlanesRowT(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
+                      int win_h, std::uint8_t* out, std::ptrdiff_t plane_stride) {
+  int x = 0;
+  for (; x + 32 <= width; x += 32) {
+    __m256i planes[8];
+    census32Planes<W, H>(win + x, stride, win_w, win_h, planes);
+    for (int j = 0; j < 8; ++j) storeu(out + j * plane_stride + x, planes[j]);
+  }
+  if (x < width)
+    scalarKernels().censusPlanesRow(win + x, stride, width - x, win_w, win_h, out + x,
+                                    plane_stride);
+}
+
+void censusPlanesRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
+                     int win_h, std::uint8_t* out, std::ptrdiff_t plane_stride) {
+  if (win_w == 9 && win_h == 7)
+    return censusPlanesRowT<9, 7>(win, stride, width, win_w, win_h, out, plane_stride);
+  if (win_w == 7 && win_h == 9)
+    return censusPlanesRowT<7, 9>(win, stride, width, win_w, win_h, out, plane_stride);
+  if (win_w == 7 && win_h == 7)
+    return censusPlanesRowT<7, 7>(win, stride, width, win_w, win_h, out, plane_stride);
+  if (win_w == 5 && win_h == 5)
+    return censusPlanesRowT<5, 5>(win, stride, width, win_w, win_h, out, plane_stride);
+  censusPlanesRowT<0, 0>(win, stride, width, win_w, win_h, out, plane_stride);
+}
+
+// Byte-plane Hamming costs of 32 pixels per step: the left planes stay in registers across the
+// disparities; per plane one xor and a nibble look-up (vpshufb) per half byte, summed in bytes
+// (at most 64, no overflow), no horizontal reduction.
+template <int NP>
+void censusPlanesCostT(const std::uint8_t* left, const std::uint8_t* right,
+                       std::ptrdiff_t plane_stride, int width, int d_first, int n_d,
+                       std::uint8_t* cost, std::ptrdiff_t cost_stride) {
+  const __m256i lut = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4,  //
+                                       0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
+  const __m256i nibble = _mm256_set1_epi8(0x0F);
+  int x = 0;
+  for (; x + 32 <= width; x += 32) {
+    __m256i l[NP];
+    for (int j = 0; j < NP; ++j) l[j] = loadu(left + j * plane_stride + x);
+    const std::uint8_t* r = right + x - d_first;
+    std::uint8_t* out = cost + x;
+    for (int k = 0; k < n_d; ++k, --r, out += cost_stride) {
+      __m256i acc0 = _mm256_setzero_si256();
+      __m256i acc1 = _mm256_setzero_si256();
+      for (int j = 0; j < NP; ++j) {
+        const __m256i v = _mm256_xor_si256(l[j], loadu(r + j * plane_stride));
+        acc0 = _mm256_add_epi8(acc0, _mm256_shuffle_epi8(lut, _mm256_and_si256(v, nibble)));
+        acc1 = _mm256_add_epi8(
+            acc1, _mm256_shuffle_epi8(lut, _mm256_and_si256(_mm256_srli_epi16(v, 4), nibble)));
+      }
+      storeu(out, _mm256_add_epi8(acc0, acc1));
+    }
+  }
+  if (x < width)
+    scalarKernels().censusPlanesCostRows(left + x, right + x, plane_stride, NP, width - x,
+                                         d_first, n_d, cost + x, cost_stride);
+}
+
+using PlanesCostFn = void (*)(const std::uint8_t*, const std::uint8_t*, std::ptrdiff_t, int, int,
+                              int, std::uint8_t*, std::ptrdiff_t);
+constexpr PlanesCostFn kPlanesCostFns[8] = {
+    &censusPlanesCostT<1>, &censusPlanesCostT<2>, &censusPlanesCostT<3>, &censusPlanesCostT<4>,
+    &censusPlanesCostT<5>, &censusPlanesCostT<6>, &censusPlanesCostT<7>, &censusPlanesCostT<8>};
+
+void censusPlanesCostRows(const std::uint8_t* left, const std::uint8_t* right,
+                          std::ptrdiff_t plane_stride, int n_planes, int width, int d_first,
+                          int n_d, std::uint8_t* cost, std::ptrdiff_t cost_stride) {
+  kPlanesCostFns[n_planes - 1](left, right, plane_stride, width, d_first, n_d, cost,
+                               cost_stride);
 }
 
 // Population count of each 64-bit element (in its low 16 bits, the rest zero).
@@ -438,7 +517,7 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
 const StereoKernels& avx2Kernels() {
   static const StereoKernels k{Backend::kAvx2, "avx2",    censusRow, censusCostRow,
                                sadCostRow,     addSubRow, boxRow,    wtaUpdateRows,
-                               finalizeRowAvx2};
+                               finalizeRowAvx2, censusPlanesRow, censusPlanesCostRows};
   return k;
 }
 

@@ -234,7 +234,7 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
 const StereoKernels& avx512Kernels() {
   static const StereoKernels k{Backend::kAvx512, "avx512",  censusRow, censusCostRow,
                                sadCostRow,       addSubRow, boxRow,    wtaUpdateRows,
-                               finalizeRowAvx2};
+                               finalizeRowAvx2,  nullptr,   nullptr};
   return k;
 }
 

@@ -229,7 +229,7 @@ void finalizeRowNeon(const WtaRowState& s, const std::uint8_t* low_texture, int 
 const StereoKernels& neonKernels() {
   static const StereoKernels k{Backend::kNeon, "neon",    censusRow, censusCostRow,
                                sadCostRow,     addSubRow, boxRow,    wtaUpdateRows,
-                               finalizeRowNeon};
+                               finalizeRowNeon,  nullptr,   nullptr};
   return k;
 }
 

@@ -105,6 +105,30 @@ void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int wi
   }
 }
 
+void censusPlanesRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
+                     int win_h, std::uint8_t* out, std::ptrdiff_t plane_stride) {
+  for (int x = 0; x < width; ++x) {
+    std::uint64_t word = 0;
+    censusRow(win + x, stride, 1, win_w, win_h, &word);
+    for (int j = 0; j < 8; ++j)
+      out[j * plane_stride + x] = static_cast<std::uint8_t>(word >> (56 - 8 * j));
+  }
+}
+
+void censusPlanesCostRows(const std::uint8_t* left, const std::uint8_t* right,
+                          std::ptrdiff_t plane_stride, int n_planes, int width, int d_first,
+                          int n_d, std::uint8_t* cost, std::ptrdiff_t cost_stride) {
+  for (int k = 0; k < n_d; ++k) {
+    const int d = d_first + k;
+    for (int x = 0; x < width; ++x) {
+      int c = 0;
+      for (int j = 0; j < n_planes; ++j)
+        c += __builtin_popcount(left[j * plane_stride + x] ^ right[j * plane_stride + x - d]);
+      cost[k * cost_stride + x] = static_cast<std::uint8_t>(c);
+    }
+  }
+}
+
 void censusCostRow(const std::uint64_t* left, const std::uint64_t* right, int width, int d,
                    std::uint8_t* cost) {
   const std::uint64_t* r = right - d;
@@ -167,7 +191,7 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
 const StereoKernels& scalarKernels() {
   static const StereoKernels k{Backend::kScalar, "scalar",  censusRow, censusCostRow,
                                sadCostRow,       addSubRow, boxRow,    wtaUpdateRows,
-                               finalizeRow};
+                               finalizeRow,      censusPlanesRow, censusPlanesCostRows};
   return k;
 }
 

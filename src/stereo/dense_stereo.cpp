@@ -60,6 +60,8 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
     return;
   }
   k_ = &simd::kernels(params_.backend);
+  census_planes_ = k_->censusPlanesRow != nullptr && k_->censusPlanesCostRows != nullptr;
+  census_nplanes_ = (params_.census_w * params_.census_h - 1 + 7) / 8;
   {
     // sigma_d for every possible parabola curvature numerator v = c- + c+ - 2 c0 (an integer up
     // to twice the largest aggregated cost): one table look-up per pixel instead of a search.
@@ -143,10 +145,21 @@ void DenseStereo::prepareRows(Stripe& s) {
       const std::uint8_t* center = padded.row(y + pad_y_) + pad_x_;
       const std::size_t off = static_cast<std::size_t>(y) * static_cast<std::size_t>(row_stride_) +
                               static_cast<std::size_t>(right_pad_);
-      if (census) {
+      const std::uint8_t* win =
+          center - (params_.census_h / 2) * padded.stride() - params_.census_w / 2;
+      if (census && census_planes_) {
+        // The row's row_stride_ words hold 8 byte planes of row_stride_ bytes.
+        std::uint8_t* out = censusPlanes(side, y);
+        k_->censusPlanesRow(win, padded.stride(), width_, params_.census_w, params_.census_h, out,
+                            row_stride_);
+        if (side == 1) {
+          for (int j = 0; j < 8; ++j) {
+            std::uint8_t* plane = out + j * row_stride_;
+            std::memset(plane - right_pad_, plane[0], static_cast<std::size_t>(right_pad_));
+          }
+        }
+      } else if (census) {
         std::uint64_t* out = (side == 0 ? census_left_ : census_right_).data() + off;
-        const std::uint8_t* win =
-            center - (params_.census_h / 2) * padded.stride() - params_.census_w / 2;
         k_->censusRow(win, padded.stride(), width_, params_.census_w, params_.census_h, out);
         if (side == 1) std::fill(out - right_pad_, out, out[0]);
       } else {
@@ -167,6 +180,14 @@ void DenseStereo::prepareRows(Stripe& s) {
       }
     }
   }
+}
+
+std::uint8_t* DenseStereo::censusPlanes(int side, int row) const {
+  const std::uint64_t* words = (side == 0 ? census_left_ : census_right_).data() +
+                               static_cast<std::size_t>(row) * static_cast<std::size_t>(row_stride_);
+  // The buffers are owned (non-const) by this object; the byte view starts at the row's first
+  // word, x = 0 sits right_pad_ bytes into each plane.
+  return const_cast<std::uint8_t*>(reinterpret_cast<const std::uint8_t*>(words)) + right_pad_;
 }
 
 std::uint8_t* DenseStereo::ringPlane(Stripe& s, int row, int i) const {
@@ -191,7 +212,14 @@ void DenseStereo::computeCostPlane(Stripe& s, int row, int i) const {
 void DenseStereo::ensureCostRow(Stripe& s, int row) const {
   int& held = s.ring_row[static_cast<std::size_t>(row % s.ring_size)];
   if (held == row) return;
-  for (int i = 0; i < params_.numDisp(); ++i) computeCostPlane(s, row, i);
+  if (params_.cost == MatchingCost::kCensus && census_planes_) {
+    // All planes of the row at once (ring planes of a row are ring_stride_ apart).
+    k_->censusPlanesCostRows(censusPlanes(0, row), censusPlanes(1, row), row_stride_,
+                             census_nplanes_, width_, params_.min_disp, params_.numDisp(),
+                             ringPlane(s, row, 0), ring_stride_);
+  } else {
+    for (int i = 0; i < params_.numDisp(); ++i) computeCostPlane(s, row, i);
+  }
   held = row;
 }
 
@@ -252,6 +280,10 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       }
     } else {
       fresh_new = s.ring_row[static_cast<std::size_t>(new_row % s.ring_size)] != new_row;
+      if (fresh_new && census_planes_ && params_.cost == MatchingCost::kCensus) {
+        ensureCostRow(s, new_row);  // every plane in one pass (the left census stays in registers)
+        fresh_new = false;
+      }
       if (use_texture) {
         texAdd(new_row, 1);
         texAdd(old_row, -1);

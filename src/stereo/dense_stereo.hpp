@@ -110,7 +110,9 @@ class DenseStereo {
   void padImage(ImageView<const std::uint8_t> src, ImageU8& dst, int y0, int y1) const;
   void prepareRows(Stripe& s);  // census or prefilter rows [s.y0, s.y1) of both images
   void matchRows(Stripe& s, DisparityResult& out);
-  std::uint8_t* ringPlane(Stripe& s, int row, int i) const;  // cost plane i of a row in the ring
+  std::uint8_t* ringPlane(Stripe& s, int row, int i) const;
+  // Byte-plane census view of a row (side 0 left, 1 right): plane j at + j * row_stride_.
+  std::uint8_t* censusPlanes(int side, int row) const;  // cost plane i of a row in the ring
   void computeCostPlane(Stripe& s, int row, int i) const;
   void ensureCostRow(Stripe& s, int row) const;  // all planes of a row present in the ring
 
@@ -125,6 +127,8 @@ class DenseStereo {
   std::ptrdiff_t ring_stride_ = 0;  // bytes per uint8 cost plane in the ring
   std::ptrdiff_t agg_stride_ = 0;   // elements per aggregated-cost row
   const simd::StereoKernels* k_ = nullptr;
+  bool census_planes_ = false;  // census in byte planes (backends with censusPlanes kernels)
+  int census_nplanes_ = 8;      // byte planes holding census bits: ceil((w h - 1) / 8)
 
   ImageU8 padded_left_, padded_right_;
   AlignedBuffer<std::uint64_t> census_left_, census_right_;  // rows of stride row_stride_

@@ -198,6 +198,75 @@ TEST_P(StereoKernelsTest, CensusRowMatchesScalar) {
   }
 }
 
+// The byte-plane census pair (optional: skipped for backends without it). Planes against the
+// scalar reference, and the scalar planes against the word layout (same census, same costs).
+TEST_P(StereoKernelsTest, CensusPlanesMatchScalarAndTheWordLayout) {
+  if (k_->censusPlanesRow == nullptr || k_->censusPlanesCostRows == nullptr)
+    GTEST_SKIP() << "backend " << k_->name << " uses the word layout only";
+  const int windows[][2] = {{3, 3}, {5, 5}, {7, 7}, {9, 7}, {7, 9}, {13, 5}, {11, 5}, {1, 9}};
+  std::mt19937 rng(9876);
+  for (const auto& w : windows) {
+    const int win_w = w[0];
+    const int win_h = w[1];
+    const int n_planes = (win_w * win_h - 1 + 7) / 8;
+    for (int width : kWidths) {
+      for (Dist dist : kDists) {
+        const std::ptrdiff_t stride = oddStride(width + win_w - 1);
+        const auto img =
+            randomU8(static_cast<std::size_t>((win_h - 1) * stride + width + win_w - 1), rng, dist);
+        const auto img_r =
+            randomU8(static_cast<std::size_t>((win_h - 1) * stride + width + win_w - 1), rng, dist);
+        const std::ptrdiff_t ps = oddStride(width);  // plane stride
+        const std::size_t n = static_cast<std::size_t>(7 * ps + width);
+        std::vector<std::uint8_t> got(n, 0xA5), want(n, 0x5A), right(n, 0);
+        k_->censusPlanesRow(img.data(), stride, width, win_w, win_h, got.data(), ps);
+        ref_->censusPlanesRow(img.data(), stride, width, win_w, win_h, want.data(), ps);
+        const std::string ctx = where("censusPlanesRow", width, win_w, win_h, 0, dist);
+        std::vector<std::uint64_t> words(static_cast<std::size_t>(width));
+        ref_->censusRow(img.data(), stride, width, win_w, win_h, words.data());
+        for (int j = 0; j < 8; ++j) {
+          for (int x = 0; x < width; ++x) {
+            const std::size_t i = static_cast<std::size_t>(j * ps + x);
+            ASSERT_EQ(got[i], want[i]) << ctx << " plane " << j << " x=" << x;
+            ASSERT_EQ(want[i], static_cast<std::uint8_t>(words[static_cast<std::size_t>(x)] >>
+                                                         (56 - 8 * j)))
+                << ctx << " plane " << j << " x=" << x;
+          }
+        }
+        // Costs: right planes readable at [-d, width - d) for d in [d_first, d_first + n_d).
+        ref_->censusPlanesRow(img_r.data(), stride, width, win_w, win_h, right.data(), ps);
+        std::vector<std::uint64_t> words_r(static_cast<std::size_t>(width));
+        ref_->censusRow(img_r.data(), stride, width, win_w, win_h, words_r.data());
+        for (int d_first : {0, 3}) {
+          const int n_d = std::max(1, std::min(width - d_first, 17));
+          if (d_first + n_d > width) continue;
+          // Shift the right planes so index x - d stays inside [0, width) for every d.
+          const int shift = d_first + n_d - 1;
+          const int cw = width - shift;  // columns whose every candidate exists
+          const std::ptrdiff_t cs = oddStride(cw);
+          std::vector<std::uint8_t> cg(static_cast<std::size_t>(n_d * cs), 0xEE);
+          std::vector<std::uint8_t> cr(cg.size(), 0x77);
+          k_->censusPlanesCostRows(got.data() + shift, right.data() + shift, ps, n_planes, cw,
+                                   d_first, n_d, cg.data(), cs);
+          ref_->censusPlanesCostRows(want.data() + shift, right.data() + shift, ps, n_planes, cw,
+                                     d_first, n_d, cr.data(), cs);
+          for (int k = 0; k < n_d; ++k) {
+            for (int x = 0; x < cw; ++x) {
+              const std::size_t i = static_cast<std::size_t>(k * cs + x);
+              ASSERT_EQ(cg[i], cr[i]) << ctx << " cost d=" << d_first + k << " x=" << x;
+              const std::uint64_t lw = words[static_cast<std::size_t>(x + shift)];
+              const std::uint64_t rw =
+                  words_r[static_cast<std::size_t>(x + shift - d_first - k)];
+              ASSERT_EQ(cr[i], __builtin_popcountll(lw ^ rw))
+                  << ctx << " cost d=" << d_first + k << " x=" << x;
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
 TEST_P(StereoKernelsTest, CensusCostRowMatchesScalar) {
   std::mt19937_64 rng(777);
   for (int width : kWidths) {
