@@ -280,10 +280,6 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       }
     } else {
       fresh_new = s.ring_row[static_cast<std::size_t>(new_row % s.ring_size)] != new_row;
-      if (fresh_new && census_planes_ && params_.cost == MatchingCost::kCensus) {
-        ensureCostRow(s, new_row);  // every plane in one pass (the left census stays in registers)
-        fresh_new = false;
-      }
       if (use_texture) {
         texAdd(new_row, 1);
         texAdd(old_row, -1);
@@ -293,14 +289,22 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
     // Planes go through the WTA in blocks of kPlaneBlock rows of s.agg (row 0 = previous plane).
     std::fill(s.agg.data(), s.agg.data() + agg_stride_, kImpossible);
     const simd::WtaRowState st = s.state();
+    const bool planes_block = fresh_new && census_planes_ && params_.cost == MatchingCost::kCensus;
     for (int i0 = 0; i0 < D; i0 += kPlaneBlock) {
       const int n = std::min(kPlaneBlock, D - i0);
+      if (planes_block) {
+        // The block's cost planes of the entering row in one pass (left census in registers);
+        // they are consumed right below while still in L1.
+        k_->censusPlanesCostRows(censusPlanes(0, new_row), censusPlanes(1, new_row), row_stride_,
+                                 census_nplanes_, W, d0 + i0, n, ringPlane(s, new_row, i0),
+                                 ring_stride_);
+      }
       for (int p = 0; p < n; ++p) {
         const int i = i0 + p;
         std::uint16_t* col =
             s.colsum.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_);
         if (y != s.y0) {
-          if (fresh_new) computeCostPlane(s, new_row, i);
+          if (fresh_new && !planes_block) computeCostPlane(s, new_row, i);
           k_->addSubRow(col + kXo, ringPlane(s, new_row, i), ringPlane(s, old_row, i),
                         static_cast<std::size_t>(W));
         }
