@@ -429,30 +429,41 @@ inline void wtaLeftBlock(const std::uint16_t* agg, std::ptrdiff_t stride, int n_
   __m256i second = loadu(second_p);
   __m256i pm1 = loadu(pm1_p);
   __m256i pm2 = loadu(pm2_p);
-  __m256i bidx = loadu(bidx_p);
   __m256i cm = loadu(cm_p);
   __m256i cp = loadu(cp_p);
-  __m256i prev = loadu(agg - stride);
-  // i < 1024 (numDisp <= 1024), so i and i - 1 fit int16 lanes.
-  __m256i vim1 = _mm256_set1_epi16(static_cast<short>(i0 - 1));
-  const std::uint16_t* const end = agg + n_planes * stride;
-#pragma GCC unroll 4
-  for (const std::uint16_t* a = agg; a != end; a += stride) {
-    const __m256i vi = _mm256_add_epi16(vim1, one);
-    const __m256i c = loadu(a);
+  // bidx1 = bidx + 1 and vi = i, so "i == bidx + 1" is one compare; i < 1024 (numDisp <= 1024)
+  // fits int16 lanes.
+  __m256i bidx1 = _mm256_add_epi16(loadu(bidx_p), one);
+  __m256i vi = _mm256_set1_epi16(static_cast<short>(i0));
+  const __m256i all = _mm256_set1_epi16(-1);
+  // One plane: c is plane i, prev plane i - 1.
+  const auto step = [&](__m256i c, __m256i prev) {
+    const __m256i vn = _mm256_add_epi16(vi, one);
     const __m256i bn = _mm256_min_epu16(best, c);
     const __m256i keep = _mm256_cmpeq_epi16(bn, best);
-    const __m256i adj = _mm256_cmpeq_epi16(bidx, vim1);
+    const __m256i adj = _mm256_cmpeq_epi16(bidx1, vi);
     second = _mm256_blendv_epi8(pm2, _mm256_min_epu16(second, _mm256_or_si256(c, adj)), keep);
-    bidx = _mm256_blendv_epi8(vi, bidx, keep);
+    bidx1 = _mm256_blendv_epi8(vn, bidx1, keep);
     cm = _mm256_blendv_epi8(prev, cm, keep);
-    cp = _mm256_blendv_epi8(_mm256_set1_epi16(-1), _mm256_blendv_epi8(cp, c, adj), keep);
+    cp = _mm256_blendv_epi8(all, _mm256_blendv_epi8(cp, c, adj), keep);
     best = bn;
     pm2 = pm1;
     pm1 = _mm256_min_epu16(pm1, c);
-    prev = c;
-    vim1 = vi;
+    vi = vn;
+  };
+  // Two planes per iteration, so the rotation prev <- c needs no register copies.
+  const std::uint16_t* a = agg;
+  __m256i prev = loadu(a - stride);
+  int p = 0;
+  for (; p + 2 <= n_planes; p += 2, a += 2 * stride) {
+    const __m256i c0 = loadu(a);
+    const __m256i c1 = loadu(a + stride);
+    step(c0, prev);
+    step(c1, c0);
+    prev = c1;
   }
+  if (p < n_planes) step(loadu(a), prev);
+  const __m256i bidx = _mm256_sub_epi16(bidx1, one);
   storeu(best_p, best);
   storeu(second_p, second);
   storeu(pm1_p, pm1);
@@ -485,12 +496,18 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
     __m256i ir = loadu(s.idx_r + xr_common);
     __m256i vi = _mm256_set1_epi16(static_cast<short>(i0));
     const std::uint16_t* a = agg + (d0 + i0) + xr_common;
-    for (int p = 0; p < n_planes; ++p, a += stride + 1) {
-      const __m256i nb = _mm256_min_epu16(br, loadu(a));
+    const auto step = [&](const std::uint16_t* q) {
+      const __m256i nb = _mm256_min_epu16(br, loadu(q));
       ir = _mm256_blendv_epi8(vi, ir, _mm256_cmpeq_epi16(nb, br));
       br = nb;
       vi = _mm256_add_epi16(vi, one);
+    };
+    int p = 0;
+    for (; p + 2 <= n_planes; p += 2, a += 2 * (stride + 1)) {  // two planes: no copies
+      step(a);
+      step(a + stride + 1);
     }
+    if (p < n_planes) step(a);
     storeu(s.best_r + xr_common, br);
     storeu(s.idx_r + xr_common, ir);
   }
