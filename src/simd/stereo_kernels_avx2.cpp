@@ -172,8 +172,10 @@ inline void census32Planes(const std::uint8_t* win, std::ptrdiff_t stride, int w
   for (int j = 0; j < 8; ++j) planes[j] = _mm256_setzero_si256();
   __m256i acc = _mm256_setzero_si256();
   int k = 0;
+#pragma GCC unroll 16
   for (int dy = 0; dy < wh; ++dy) {
     const std::uint8_t* r = win + dy * stride;
+#pragma GCC unroll 16
     for (int dx = 0; dx < ww; ++dx) {
       if (dy == cy && dx == cx) continue;
       const __m256i nb = loadu(r + dx);
