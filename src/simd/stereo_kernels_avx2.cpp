@@ -263,6 +263,34 @@ void censusPlanesCostT(const std::uint8_t* left, const std::uint8_t* right,
     for (int j = 0; j < NP; ++j) l[j] = loadu(left + j * plane_stride + x);
     const std::uint8_t* r = right + x - d_first;
     std::uint8_t* out = cost + x;
+    if constexpr (NP == 8) {
+      // Eight planes through a carry-save adder tree first (full adder: s = a ^ b ^ c,
+      // carry = ab | (a ^ b) c, so a + b + c = s + 2 carry bitwise): popcount =
+      // pop(s3) + pop(x7) + 2 (pop(t) + 2 pop(f)), four look-up pairs instead of eight.
+      const auto pop = [&](__m256i v) {
+        return _mm256_add_epi8(_mm256_shuffle_epi8(lut, _mm256_and_si256(v, nibble)),
+                               _mm256_shuffle_epi8(
+                                   lut, _mm256_and_si256(_mm256_srli_epi16(v, 4), nibble)));
+      };
+      const auto fa = [](__m256i a, __m256i b, __m256i c, __m256i& sum, __m256i& carry) {
+        const __m256i u = _mm256_xor_si256(a, b);
+        sum = _mm256_xor_si256(u, c);
+        carry = _mm256_or_si256(_mm256_and_si256(a, b), _mm256_and_si256(u, c));
+      };
+      for (int k = 0; k < n_d; ++k, --r, out += cost_stride) {
+        const auto xj = [&](int j) { return _mm256_xor_si256(l[j], loadu(r + j * plane_stride)); };
+        __m256i s1, c1, s2, c2, s3, c3, t, f;
+        fa(xj(0), xj(1), xj(2), s1, c1);
+        fa(xj(3), xj(4), xj(5), s2, c2);
+        fa(s1, s2, xj(6), s3, c3);
+        fa(c1, c2, c3, t, f);
+        const __m256i pf = pop(f);
+        const __m256i w2 = _mm256_add_epi8(pop(t), _mm256_add_epi8(pf, pf));
+        storeu(out, _mm256_add_epi8(_mm256_add_epi8(pop(s3), pop(xj(7))),
+                                    _mm256_add_epi8(w2, w2)));
+      }
+      continue;
+    }
     for (int k = 0; k < n_d; ++k, --r, out += cost_stride) {
       __m256i acc0 = _mm256_setzero_si256();
       __m256i acc1 = _mm256_setzero_si256();
