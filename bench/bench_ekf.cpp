@@ -2,7 +2,9 @@
 // one prediction + one update with 20, 30 or 40 stereo observations, 300 landmarks in the
 // state, svslam's sparse-H update (Joseph form, and the optimal-gain form) beside a naive dense
 // textbook EKF (full F, dense H, P = (I - K H) P (I - K H)^T + K R K^T) in the same binary.
-// Prints ms per frame and the ratio svslam / dense at the end. One thread.
+// One thread, except joseph_2threads: the update's products split in row pieces on a two-thread
+// pool (bit-identical results). Also the n x n product alone per matrix backend beside Eigen's.
+// Prints ms per frame and the ratio svslam / dense at the end.
 #include <benchmark/benchmark.h>
 
 #include <Eigen/Cholesky>
@@ -12,8 +14,10 @@
 #include <string>
 
 #include "motion/visual_motion.hpp"
+#include "pipeline/thread_pool_executor.hpp"
 #include "slam/ekf_slam.hpp"
 #include "slam/pose_jacobians.hpp"
+#include "simd/matrix_kernels.hpp"
 
 namespace {
 
@@ -64,8 +68,9 @@ void observe(const svslam::EkfSlam& ekf, int n_obs, int frame,
   }
 }
 
-void runSvslam(benchmark::State& st, bool joseph) {
+void runSvslam(benchmark::State& st, bool joseph, int threads = 1) {
   const int n_obs = static_cast<int>(st.range(0));
+  svslam::ThreadPoolExecutor pool(threads);
   svslam::EkfSlamParams params;
   params.joseph_form = joseph;
   svslam::EkfSlam ekf(params);
@@ -78,7 +83,8 @@ void runSvslam(benchmark::State& st, bool joseph) {
     st.PauseTiming();
     observe(ekf, n_obs, frame++, obs);
     st.ResumeTiming();
-    if (!ekf.predict(motion(), motionCov()) || !ekf.update(obs, res))
+    if (!ekf.predict(motion(), motionCov()) ||
+        !ekf.update(obs, res, threads > 1 ? &pool : nullptr))
       st.SkipWithError("EKF failed");
     for (const auto& r : res) accepted += r.accepted ? 1 : 0;
   }
@@ -89,6 +95,7 @@ void runSvslam(benchmark::State& st, bool joseph) {
 
 void BM_Ekf_svslam_joseph(benchmark::State& st) { runSvslam(st, true); }
 void BM_Ekf_svslam_optimal_gain(benchmark::State& st) { runSvslam(st, false); }
+void BM_Ekf_svslam_joseph_2threads(benchmark::State& st) { runSvslam(st, true, 2); }
 
 // Naive dense EKF on the same model: full n x n Jacobians and products everywhere.
 void BM_Ekf_dense_reference(benchmark::State& st) {
@@ -142,7 +149,58 @@ void BM_Ekf_dense_reference(benchmark::State& st) {
   st.counters["frames"] = benchmark::Counter(static_cast<double>(st.iterations()));
 }
 
+// The update's n x n product alone: lower triangle of P - U V^T with n = 906 (300 landmarks)
+// and r = 2m = 180 (Joseph form, 30 observations), per matrix backend beside Eigen's
+// triangular product (the previous implementation) on the same operands.
+void runRankUpdate(benchmark::State& st, int backend) {
+  const int n = 6 + 3 * kLandmarks, r = 180;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd P(n, n), U(n, r), V(n, r);
+  for (Eigen::MatrixXd* M : {&P, &U, &V})
+    for (Eigen::Index i = 0; i < M->size(); ++i) M->data()[i] = g(rng);
+  std::vector<double> ws(svslam::simd::rankUpdateWorkspace(n, n, r));
+  const svslam::simd::MatrixKernels* k = nullptr;
+  if (backend >= 0) {
+    const auto b = static_cast<svslam::simd::Backend>(backend);
+    if (!svslam::simd::matrixBackendAvailable(b)) {
+      st.SkipWithError("backend not available on this CPU");
+      return;
+    }
+    k = &svslam::simd::matrixKernels(b);
+  }
+  for (auto _ : st) {
+    if (k)
+      k->rankUpdate(P.data(), n, U.data(), n, V.data(), n, n, n, r, true, 0, ws.data());
+    else
+      P.triangularView<Eigen::Lower>() -= U * V.transpose();
+    benchmark::DoNotOptimize(P.data());
+  }
+  st.counters["GFMA/s"] = benchmark::Counter(0.5 * n * (n + 1.0) * r * 1e-9,
+                                             benchmark::Counter::kIsIterationInvariantRate);
+}
+void BM_RankUpdate_eigen(benchmark::State& st) { runRankUpdate(st, -1); }
+void BM_RankUpdate_scalar(benchmark::State& st) {
+  runRankUpdate(st, static_cast<int>(svslam::simd::Backend::kScalar));
+}
+void BM_RankUpdate_avx2(benchmark::State& st) {
+  runRankUpdate(st, static_cast<int>(svslam::simd::Backend::kAvx2));
+}
+void BM_RankUpdate_neon(benchmark::State& st) {
+  runRankUpdate(st, static_cast<int>(svslam::simd::Backend::kNeon));
+}
+BENCHMARK(BM_RankUpdate_eigen)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RankUpdate_scalar)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_RankUpdate_avx2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RankUpdate_neon)->Unit(benchmark::kMillisecond);
+
 BENCHMARK(BM_Ekf_svslam_joseph)
+    ->Arg(20)
+    ->Arg(30)
+    ->Arg(40)
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(1.0);
+BENCHMARK(BM_Ekf_svslam_joseph_2threads)
     ->Arg(20)
     ->Arg(30)
     ->Arg(40)
@@ -170,7 +228,7 @@ class FrameReporter : public benchmark::ConsoleReporter {
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
-    std::printf("\nPer frame (predict + update, %d landmarks in the state, 1 thread):\n",
+    std::printf("\nPer frame (predict + update, %d landmarks in the state):\n",
                 kLandmarks);
     for (const auto& [name, ms] : per_frame_ms_)
       std::printf("  %-52s %8.2f ms\n", name.c_str(), ms);

@@ -2,11 +2,13 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include "motion/visual_motion.hpp"
+#include "simd/matrix_kernels.hpp"
 
 namespace svslam {
 namespace {
@@ -51,6 +53,8 @@ Status EkfSlamParams::validate() const {
     return Status::invalidArgument("max_landmarks must be in [1, 3000]");
   if (max_batch_observations < 1 || max_batch_observations > 1000)
     return Status::invalidArgument("max_batch_observations must be in [1, 1000]");
+  if (max_update_tasks < 1 || max_update_tasks > 16)
+    return Status::invalidArgument("max_update_tasks must be in [1, 16]");
   if (!(gate_chi2 > 0) || !std::isfinite(gate_chi2))
     return Status::invalidArgument("gate_chi2 must be finite and > 0");
   return Status::ok();
@@ -69,9 +73,14 @@ EkfSlam::EkfSlam(const EkfSlamParams& params) : params_(params) {
   B_.setZero(cap, 2 * mcap);
   S_.setZero(mcap, mcap);
   L_.setZero(mcap, mcap);
-  W_.setZero(mcap, cap);
+  T_.setZero(mcap, mcap);
   nu_.setZero(mcap);
   dx_.setZero(cap);
+  if (simd::matrixKernelsHaveHardwareFma()) {
+    rank_update_ = &simd::matrixKernels();
+    ws_piece_ = simd::rankUpdateWorkspace(cap, cap, 2 * mcap);
+    rank_update_ws_.assign(ws_piece_ * static_cast<std::size_t>(params_.max_update_tasks), 0.0);
+  }
   ids_.reserve(static_cast<std::size_t>(params_.max_landmarks));
   accepted_.reserve(static_cast<std::size_t>(params_.max_batch_observations));
 }
@@ -150,8 +159,9 @@ Status EkfSlam::checkObservations(const std::vector<LandmarkObservation>& obs) c
 }
 
 Status EkfSlam::update(const std::vector<LandmarkObservation>& obs,
-                       std::vector<ObservationResult>& results) {
+                       std::vector<ObservationResult>& results, Executor* executor) {
   if (!init_status_) return init_status_;
+  executor_ = executor;
   if (Status s = checkObservations(obs); !s) return s;
   results.resize(obs.size());
   // Gating of every observation against the state before any update:
@@ -225,36 +235,79 @@ Status EkfSlam::applyBatch(const std::vector<LandmarkObservation>& obs, const in
   Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(L);
   if (llt.info() != Eigen::Success)
     return Status(StatusCode::kInternal, "update: innovation covariance not positive definite");
-  // W = L^-1 M^T (the optimal-gain factor B^T); Joseph: W <- L^-T W = S^-1 M^T = K^T.
-  auto W = W_.topLeftCorner(m, n);
-  W = M.transpose();
-  llt.matrixL().solveInPlace(W);
   auto dx = dx_.head(n);
+  auto G = A_.block(0, 0, n, m);  // Joseph: K; optimal gain: B
+  auto T = T_.topLeftCorner(m, m);
+  T.setIdentity();
   if (params_.joseph_form) {
-    llt.matrixU().solveInPlace(W);
-    dx.noalias() = W.transpose() * nu;  // K nu
+    // K = M S^-1 with the explicit (exactly symmetric) S^-1, D = M - K S.
+    llt.solveInPlace(T);
+    for (int c = 0; c < m; ++c)
+      for (int r = c + 1; r < m; ++r) T(r, c) = T(c, r) = 0.5 * (T(r, c) + T(c, r));
+    G.setZero();
+    subtractProduct(G, M, T, false);  // -M S^-1 (S^-1 symmetric: B(j, k) = S^-1(k, j))
+    G = -G;
+    dx.noalias() = G * nu;  // K nu
   } else {
+    // B = M L^-T: B(i, j) = sum_k M(i, k) L^-1(j, k).
+    llt.matrixL().solveInPlace(T);
+    G.setZero();
+    subtractProduct(G, M, T, false);
+    G = -G;
     llt.matrixL().solveInPlace(nu);  // L^-1 nu, so B L^-1 nu = M S^-1 nu = K nu
-    dx.noalias() = W.transpose() * nu;
+    dx.noalias() = G * nu;
   }
-  if (!dx.allFinite() || !W.allFinite())
+  if (!dx.allFinite() || !G.allFinite())
     return Status(StatusCode::kInternal, "update: non-finite gain");
   auto P = P_.topLeftCorner(n, n);
   if (params_.joseph_form) {
-    // Lower triangle of P - [K D][M K]^T, D = M - K S.
-    auto K = A_.block(0, 0, n, m);
-    K = W.transpose();
-    B_.block(0, m, n, m) = K;
+    // Lower triangle of P - [K D][M K]^T, D = M - K S (S symmetric: B(j, k) = S(k, j)).
+    B_.block(0, m, n, m) = G;
     auto D = A_.block(0, m, n, m);
     D = M;
-    D.noalias() -= K * S;
-    P.triangularView<Lower>() -=
-        A_.topLeftCorner(n, 2 * m) * B_.topLeftCorner(n, 2 * m).transpose();
+    subtractProduct(D, G, S, false);
+    subtractProduct(P, A_.topLeftCorner(n, 2 * m), B_.topLeftCorner(n, 2 * m), true);
   } else {
-    P.selfadjointView<Lower>().rankUpdate(W.transpose(), -1.0);  // P - B B^T
+    subtractProduct(P, G, G, true);  // P - B B^T
   }
   inject(n);
   return Status::ok();
+}
+
+void EkfSlam::subtractProduct(Eigen::Ref<Eigen::MatrixXd> C,
+                              const Eigen::Ref<const Eigen::MatrixXd>& U,
+                              const Eigen::Ref<const Eigen::MatrixXd>& V, bool lower_only) {
+  const int rows = static_cast<int>(C.rows()), cols = static_cast<int>(C.cols()),
+            r = static_cast<int>(U.cols());
+  if (!rank_update_) {
+    if (lower_only)
+      C.triangularView<Lower>() -= U * V.transpose();
+    else
+      C.noalias() -= U * V.transpose();
+    return;
+  }
+  // Row pieces of (nearly) equal work: [b_k, b_{k+1}) with b_k = rows sqrt(k / p) for the
+  // triangle (its first b rows hold b^2 / 2 elements), rows k / p for a full product.
+  int pieces = 1;
+  if (executor_ && rows >= 128)
+    pieces = std::max(1, std::min(executor_->concurrency(), params_.max_update_tasks));
+  const auto bound = [&](int k) {
+    if (k >= pieces) return rows;
+    const double f = static_cast<double>(k) / pieces;
+    return static_cast<int>(rows * (lower_only ? std::sqrt(f) : f));
+  };
+  const auto piece = [&](int k) {
+    const int r0 = bound(k), r1 = bound(k + 1);
+    if (r1 <= r0) return;
+    rank_update_->rankUpdate(&C(r0, 0), C.outerStride(), U.data() + r0, U.outerStride(), V.data(),
+                             V.outerStride(), r1 - r0, lower_only ? std::min(cols, r1) : cols, r,
+                             lower_only, r0,
+                             rank_update_ws_.data() + ws_piece_ * static_cast<std::size_t>(k));
+  };
+  if (pieces == 1)
+    piece(0);
+  else
+    executor_->parallelFor(pieces, piece);
 }
 
 void EkfSlam::inject(int n) {

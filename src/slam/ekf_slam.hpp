@@ -23,7 +23,8 @@
 // gated on the Mahalanobis distance d^2 = nu^T S^-1 nu against gate_chi2, all against the state
 // before the call (before any update); gated ones are reported and not applied. The accepted
 // ones are stacked into one update (in batches of at most max_batch_observations, applied one
-// after the other, when there are more): with M = P H^T (n x m), K = M S^-1,
+// after the other, when there are more): with M = P H^T (n x m), K = M S^-1 (S^-1 formed
+// explicitly from the Cholesky factor of S and made exactly symmetric),
 //     x <- x (+) K nu,
 //     Joseph form: P <- (I - K H) P (I - K H)^T + K R K^T = P - K M^T - M K^T + K S K^T,
 // evaluated as P - [K D][M K]^T with D = M - K S (exact for any K; D is the round-off of the
@@ -32,7 +33,11 @@
 // P - B B^T, B = M L^-T (S = L L^T), is used instead: a symmetric rank-m downdate, half the
 // flops of the Joseph product, but without its guarantee against a perturbed gain.
 // P is stored as its lower triangle only and every update computes the lower triangle of the
-// new (symmetric) matrix: the represented P is exactly symmetric by construction.
+// new (symmetric) matrix: the represented P is exactly symmetric by construction. The n x n
+// products (K, D and the n x n one, which dominates) run in simd::MatrixKernels::rankUpdate
+// (fused multiply-adds in a fixed order, AVX2/NEON chosen at run time, bit-exact with the scalar
+// reference, so the filter gives the same bits on every backend); on a CPU without hardware FMA,
+// Eigen's products instead.
 //
 // Landmark initialisation (seed eqs. 4-5): m = g(x_p, z) = R_wc z + t_wc,
 //     P_mm = G_x P_pp G_x^T + G_z R_z G_z^T,   P_m,x = G_x [P_pp P_p,m_1 .. P_p,m_N].
@@ -52,7 +57,9 @@
 #include <Eigen/Geometry>
 #include <vector>
 
+#include "core/executor.hpp"
 #include "core/status.hpp"
+#include "simd/matrix_kernels.hpp"
 #include "slam/pose_jacobians.hpp"
 
 namespace svslam {
@@ -65,6 +72,10 @@ struct EkfSlamParams {
   double gate_chi2 = 11.34;         // Mahalanobis d^2 threshold, chi-square with 3 dof
                                     // (11.34: 99 %, 7.81: 95 %, 16.27: 99.9 %), > 0
   bool joseph_form = true;  // Joseph-form covariance update; false: optimal-gain form P - B B^T
+  int max_update_tasks = 2;  // row pieces the update's products are split into on the executor
+                             // given to update(), [1, 16]; each piece has its own preallocated
+                             // workspace of (2 n_max + 32) 2 m_max doubles (300 landmarks and
+                             // 64 observations: 5.7 MB). Results do not depend on it.
   Status validate() const;
 };
 
@@ -93,9 +104,10 @@ class EkfSlam {
   // Prediction with the VME result T_cur_prev and its covariance R_u ([dtheta_u, dt_u], VME
   // convention, symmetric positive semi-definite).
   Status predict(const Eigen::Isometry3d& T_cur_prev, const Matrix6d& R_u);
-  // Gates and applies the observations of one frame; results[k] describes obs[k].
+  // Gates and applies the observations of one frame; results[k] describes obs[k]. The products
+  // run as row pieces on `executor` when given (bit-identical results for any executor).
   Status update(const std::vector<LandmarkObservation>& obs,
-                std::vector<ObservationResult>& results);
+                std::vector<ObservationResult>& results, Executor* executor = nullptr);
   // Adds the landmark measured at z_cam (current camera frame, m) with covariance R_z (m^2,
   // symmetric positive semi-definite); returns its id. failedPrecondition when the state is full.
   Result<int> addLandmark(const Eigen::Vector3d& z_cam, const Eigen::Matrix3d& R_z);
@@ -121,6 +133,9 @@ class EkfSlam {
   Status checkObservations(const std::vector<LandmarkObservation>& obs) const;
   Status applyBatch(const std::vector<LandmarkObservation>& obs, const int* idx, int count);
   void inject(int n);
+  // C -= U V^T (only its lower triangle when lower_only), through the matrix kernels.
+  void subtractProduct(Eigen::Ref<Eigen::MatrixXd> C, const Eigen::Ref<const Eigen::MatrixXd>& U,
+                       const Eigen::Ref<const Eigen::MatrixXd>& V, bool lower_only);
 
   EkfSlamParams params_;
   Status init_status_;
@@ -135,9 +150,13 @@ class EkfSlam {
   Eigen::MatrixXd P_lm_;     // n x 3, full P columns of one landmark
   Eigen::MatrixXd A_, B_;    // n x 2m: [K D] and [M K]
   Eigen::MatrixXd S_, L_;    // m x m: innovation covariance and its Cholesky factor
-  Eigen::MatrixXd W_;        // m x n: L^-1 M^T, then K^T
+  Eigen::MatrixXd T_;        // m x m: S^-1 (Joseph) or L^-1 (optimal gain)
   Eigen::VectorXd nu_, dx_;  // m, n
   std::vector<int> accepted_;
+  const simd::MatrixKernels* rank_update_ = nullptr;  // null: no hardware FMA, Eigen's product
+  std::vector<double> rank_update_ws_;  // max_update_tasks pieces of ws_piece_ doubles
+  std::size_t ws_piece_ = 0;
+  Executor* executor_ = nullptr;  // the executor of the update() in progress
 };
 
 }  // namespace svslam
