@@ -18,7 +18,9 @@ enum class Backend { kAuto, kScalar, kAvx2, kAvx512, kNeon };
 // ascending) by wtaUpdateRow. All arrays have `width` entries. Meaning once every plane is done:
 //   best[x]   min_i agg_i[x]; bidx[x] the smallest i reaching it, -1 if every agg is 0xFFFF
 //   second[x] min of agg_i[x] over i with |i - bidx[x]| > 1 (0xFFFF if none)
-//   cm[x], cp[x]  agg at bidx - 1 and bidx + 1 (0xFFFF when outside the range)
+//   cm[x], cp[x]  agg at bidx - 1 and bidx + 1 (0xFFFF when outside the range); the scalar
+//                 reference streams them, other backends may leave them stale: wtaNeighbours
+//                 sets them from the stored planes once every plane is done
 //   best_r[xr], idx_r[xr]  the right image's WTA on the same costs: candidates agg_i[xr + d0 + i],
 //                          smallest i on ties, -1 when none is below 0xFFFF
 // pm1, pm2 are internal prefix minima (over planes <= i-1 and <= i-2). wtaInitRow sets the start.
@@ -40,6 +42,10 @@ void wtaInitRow(const WtaRowState& s, int width);
 // tail of a vector body (right-image candidates are left to the caller).
 void wtaLeftTail(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int x0,
                  int width, const WtaRowState& s);
+
+// The scalar reference of wtaNeighbours on columns [x0, width).
+void wtaNeighboursRange(const std::uint16_t* agg, std::ptrdiff_t stride, int num_disp, int x0,
+                        int width, const WtaRowState& s);
 
 // The right-image update of plane i for right pixels [xr0, n_right): candidate cand[xr] (the
 // plane's cost at x = xr + d0 + i) replaces best_r[xr] when strictly smaller.
@@ -113,6 +119,12 @@ struct StereoKernels {
   // i0 - 1 (0xFFFF-filled when i0 = 0). Right-image candidates of plane i start at x = d0 + i.
   void (*wtaUpdateRows)(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0,
                         int width, int d0, const WtaRowState& s);
+
+  // cm[x] = bidx >= 1 ? agg_{bidx-1}[x] : 0xFFFF and cp[x] = 0 <= bidx < num_disp - 1 ?
+  // agg_{bidx+1}[x] : 0xFFFF, plane i being the row agg + i * stride, for x in [0, width).
+  // Precondition: rows 0 .. num_disp - 1 readable at [0, width + 1) (32-bit gathers).
+  void (*wtaNeighbours)(const std::uint16_t* agg, std::ptrdiff_t stride, int num_disp, int width,
+                        const WtaRowState& s);
 
   // Step 4-5 for one row, as FinalizeParams documents (finalizeRange on [0, width)).
   void (*finalizeRow)(const WtaRowState& s, const std::uint8_t* low_texture, int width,

@@ -231,10 +231,18 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
 
 }  // namespace
 
+namespace {
+// cm / cp from the stored planes: per pixel, not per pixel-disparity, so the reference.
+void wtaNeighboursScalar(const std::uint16_t* agg, std::ptrdiff_t stride, int num_disp, int width,
+                         const WtaRowState& s) {
+  wtaNeighboursRange(agg, stride, num_disp, 0, width, s);
+}
+}  // namespace
+
 const StereoKernels& avx512Kernels() {
   static const StereoKernels k{Backend::kAvx512, "avx512",  censusRow, censusCostRow,
                                sadCostRow,       addSubRow, boxRow,    wtaUpdateRows,
-                               finalizeRowAvx2,  nullptr,   nullptr};
+                               wtaNeighboursScalar, finalizeRowAvx2,  nullptr,   nullptr};
   return k;
 }
 

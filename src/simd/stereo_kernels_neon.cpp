@@ -226,10 +226,18 @@ void finalizeRowNeon(const WtaRowState& s, const std::uint8_t* low_texture, int 
 }
 }  // namespace
 
+namespace {
+// cm / cp from the stored planes: per pixel, not per pixel-disparity, so the reference.
+void wtaNeighboursScalar(const std::uint16_t* agg, std::ptrdiff_t stride, int num_disp, int width,
+                         const WtaRowState& s) {
+  wtaNeighboursRange(agg, stride, num_disp, 0, width, s);
+}
+}  // namespace
+
 const StereoKernels& neonKernels() {
   static const StereoKernels k{Backend::kNeon, "neon",    censusRow, censusCostRow,
                                sadCostRow,     addSubRow, boxRow,    wtaUpdateRows,
-                               finalizeRowNeon,  nullptr,   nullptr};
+                               wtaNeighboursScalar, finalizeRowNeon,  nullptr,   nullptr};
   return k;
 }
 

@@ -33,6 +33,15 @@ void wtaRightTail(const std::uint16_t* cand, int xr0, int n_right, int i, const 
   }
 }
 
+void wtaNeighboursRange(const std::uint16_t* agg, std::ptrdiff_t stride, int num_disp, int x0,
+                        int width, const WtaRowState& s) {
+  for (int x = x0; x < width; ++x) {
+    const int b = s.bidx[x];
+    s.cm[x] = b >= 1 ? agg[(b - 1) * stride + x] : std::uint16_t{0xFFFF};
+    s.cp[x] = b >= 0 && b + 1 < num_disp ? agg[(b + 1) * stride + x] : std::uint16_t{0xFFFF};
+  }
+}
+
 void finalizeRange(const WtaRowState& s, const std::uint8_t* low_texture, int x0, int width,
                    const FinalizeParams& p, float* disp, float* sigma, float* curv,
                    FinalizeCounts& counts) {
@@ -78,6 +87,11 @@ void finalizeRange(const WtaRowState& s, const std::uint8_t* low_texture, int x0
 }
 
 namespace {
+
+void wtaNeighbours(const std::uint16_t* agg, std::ptrdiff_t stride, int num_disp, int width,
+                   const WtaRowState& s) {
+  wtaNeighboursRange(agg, stride, num_disp, 0, width, s);
+}
 
 void finalizeRow(const WtaRowState& s, const std::uint8_t* low_texture, int width,
                  const FinalizeParams& p, float* disp, float* sigma, float* curv,
@@ -191,7 +205,7 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
 const StereoKernels& scalarKernels() {
   static const StereoKernels k{Backend::kScalar, "scalar",  censusRow, censusCostRow,
                                sadCostRow,       addSubRow, boxRow,    wtaUpdateRows,
-                               finalizeRow,      censusPlanesRow, censusPlanesCostRows};
+                               wtaNeighbours,    finalizeRow,      censusPlanesRow, censusPlanesCostRows};
   return k;
 }
 

@@ -28,7 +28,7 @@ struct DenseStereo::Stripe {
   AlignedBuffer<std::uint8_t> ring;  // ring_size cost rows of numDisp planes of ring_stride bytes
   std::vector<int> ring_row;         // image row held by each ring slot, -1 if none
   AlignedBuffer<std::uint16_t> colsum;  // numDisp planes of cost_stride_, x = 0 at kXo
-  AlignedBuffer<std::uint16_t> agg;  // kPlaneBlock + 1 rows of agg_stride_: previous plane, block
+  AlignedBuffer<std::uint16_t> agg;  // numDisp + 1 rows of agg_stride_: plane -1, planes
   AlignedBuffer<std::uint16_t> best, second, cm, cp, pm1, pm2, best_r;
   AlignedBuffer<std::int16_t> bidx, idx_r;
   std::vector<std::uint32_t> tex_col;
@@ -109,8 +109,8 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
     st->ring_row.assign(static_cast<std::size_t>(st->ring_size), -1);
     st->colsum.resize(static_cast<std::size_t>(D) * static_cast<std::size_t>(cost_stride_));
     const std::size_t wn = static_cast<std::size_t>(roundUp(width, 64));
-    st->agg.resize(static_cast<std::size_t>(kPlaneBlock + 1) *
-                   static_cast<std::size_t>(agg_stride_));
+    // Row 0: plane -1 (all 0xFFFF), row i + 1: plane i; slack for wtaNeighbours' 32-bit reads.
+    st->agg.resize(static_cast<std::size_t>(D + 1) * static_cast<std::size_t>(agg_stride_) + 16);
     for (auto* b : {&st->best, &st->second, &st->cm, &st->cp, &st->pm1, &st->pm2, &st->best_r})
       b->resize(wn);
     st->bidx.resize(wn);
@@ -286,7 +286,7 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       }
     }
     simd::wtaInitRow(s.state(), W);
-    // Planes go through the WTA in blocks of kPlaneBlock rows of s.agg (row 0 = previous plane).
+    // Planes go through the WTA in blocks of kPlaneBlock (rows of s.agg, row 0 = plane -1).
     std::fill(s.agg.data(), s.agg.data() + agg_stride_, kImpossible);
     const simd::WtaRowState st = s.state();
     const bool planes_block = fresh_new && census_planes_ && params_.cost == MatchingCost::kCensus;
@@ -311,17 +311,16 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
         std::fill(col + kXo - rw, col + kXo, col[kXo]);
         std::fill(col + kXo + W, col + kXo + W + rw, col[kXo + W - 1]);
         std::uint16_t* agg =
-            s.agg.data() + static_cast<std::size_t>(p + 1) * static_cast<std::size_t>(agg_stride_);
+            s.agg.data() + static_cast<std::size_t>(i + 1) * static_cast<std::size_t>(agg_stride_);
         k_->boxRow(col + kXo - rw, W, params_.window_w, agg);
         std::fill(agg, agg + std::min(W, d0 + i), kImpossible);  // x - d < 0: no match possible
       }
-      k_->wtaUpdateRows(s.agg.data() + agg_stride_, agg_stride_, n, i0, W, d0, st);
-      // The last plane of this block is the "previous plane" of the next block.
-      std::memcpy(
-          s.agg.data(),
-          s.agg.data() + static_cast<std::size_t>(n) * static_cast<std::size_t>(agg_stride_),
-          static_cast<std::size_t>(W) * sizeof(std::uint16_t));
+      k_->wtaUpdateRows(
+          s.agg.data() + static_cast<std::size_t>(i0 + 1) * static_cast<std::size_t>(agg_stride_),
+          agg_stride_, n, i0, W, d0, st);
     }
+    // Costs at d_best -+ 1 for the parabola, from the stored planes.
+    k_->wtaNeighbours(s.agg.data() + agg_stride_, agg_stride_, D, W, st);
     if (fresh_new) s.ring_row[static_cast<std::size_t>(new_row % s.ring_size)] = new_row;
     if (use_texture) {
       // Horizontal box of the texture column sums, borders replicated.
