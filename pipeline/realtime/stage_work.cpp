@@ -43,10 +43,15 @@ Status RunWork::init() {
   stereo_stage_ = std::make_unique<StereoStage>(cfg_.odometry, source_.calibration());
   if (Status s = stereo_stage_->initStatus(); !s) return s;
   if (Status s = buildEstimator(); !s) return s;
-  if (cfg_.threads > 1)
+  // One pool per stage thread (a ThreadPoolExecutor serves one parallelFor at a time); the
+  // estimator's splits the EKF update's products. Results do not depend on either.
+  if (cfg_.threads > 1) {
     stereo_executor_ = std::make_unique<ThreadPoolExecutor>(cfg_.threads);
-  else
+    estimator_executor_ = std::make_unique<ThreadPoolExecutor>(cfg_.threads);
+  } else {
     stereo_executor_ = std::make_unique<SerialExecutor>();
+    estimator_executor_ = std::make_unique<SerialExecutor>();
+  }
   stereo_clock_ = std::make_unique<Clock>(stereo_times_);
   estimator_clock_ = std::make_unique<Clock>(estimator_times_);
   if (Status s = traj_.open(out_dir_ + "/trajectory_kitti.txt", out_dir_ + "/trajectory_tum.txt");
@@ -114,11 +119,11 @@ Status RunWork::estimate(FrameSlot& slot) {
   const auto right = slot.frame.right.cview();
   Status s;
   if (ekf_mode_) {
-    s = slam_->process(left, right, slot.stereo, slot.result, estimator_executor_,
+    s = slam_->process(left, right, slot.stereo, slot.result, *estimator_executor_,
                        estimator_clock_.get());
   } else {
     slot.result = SlamFrameResult{};
-    s = vo_->frontEnd(left, right, slot.stereo, slot.result.odometry, estimator_executor_,
+    s = vo_->frontEnd(left, right, slot.stereo, slot.result.odometry, *estimator_executor_,
                       estimator_clock_.get());
     if (s) s = vo_->estimateMotion(nullptr, slot.result.odometry, estimator_clock_.get());
     slot.result.T_world_cam = slot.result.odometry.T_first_cam;

@@ -76,7 +76,7 @@ class RunWork final : public PipelineWork {
   // Estimator thread.
   std::unique_ptr<SlamSystem> slam_;
   std::unique_ptr<StereoOdometry> vo_;
-  SerialExecutor estimator_executor_;
+  std::unique_ptr<Executor> estimator_executor_;  // its own pool: runs beside the stereo one
   std::unique_ptr<Clock> estimator_clock_;
   run::StageTimes estimator_times_;
   std::atomic<bool> reset_requested_{false};

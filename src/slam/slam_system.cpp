@@ -345,7 +345,7 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left,
   if (!init_status_) return init_status_;
   out = SlamFrameResult{};
   if (Status s = vo_.frontEnd(left, right, out.odometry, executor, observer); !s) return s;
-  return afterFrontEnd(left, right, out, observer);
+  return afterFrontEnd(left, right, out, executor, observer);
 }
 
 Status SlamSystem::process(ImageView<const std::uint8_t> left,
@@ -354,12 +354,12 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left,
   if (!init_status_) return init_status_;
   out = SlamFrameResult{};
   if (Status s = vo_.frontEnd(left, right, stereo, out.odometry, executor, observer); !s) return s;
-  return afterFrontEnd(left, right, out, observer);
+  return afterFrontEnd(left, right, out, executor, observer);
 }
 
 Status SlamSystem::afterFrontEnd(ImageView<const std::uint8_t> left,
                                  ImageView<const std::uint8_t> right, SlamFrameResult& out,
-                                 StageObserver* observer) {
+                                 Executor& executor, StageObserver* observer) {
   if (frame_ == 0) {
     prev_tracks_.clear();
     prev_landmark_uv_.clear();
@@ -382,7 +382,7 @@ Status SlamSystem::afterFrontEnd(ImageView<const std::uint8_t> left,
     if (Status s = ekf_.predict(od.T_cur_prev, R_u); !s) return s;
     searchLandmarks(left, right, out);
     if (!obs_.empty()) {
-      if (Status s = ekf_.update(obs_, results_); !s) return s;
+      if (Status s = ekf_.update(obs_, results_, &executor); !s) return s;
       for (std::size_t i = 0; i < obs_.size(); ++i) {
         if (!results_[i].accepted) {
           ++out.gated;

@@ -111,9 +111,9 @@ class SlamSystem {
   // Whether (u, v) lies within landmark_exclusion_px of one of `landmarks_uv` (px).
   bool nearLandmark(const std::vector<Eigen::Vector2f>& landmarks_uv, float u, float v) const;
   void passTracks();
-  // process() after the front end.
+  // process() after the front end; the EKF update's products run on `executor`.
   Status afterFrontEnd(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                       SlamFrameResult& out, StageObserver* observer);
+                       SlamFrameResult& out, Executor& executor, StageObserver* observer);
   // Searches the landmarks of the state in the current pair; fills obs_ / obs_uv_.
   void searchLandmarks(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                        SlamFrameResult& out);
