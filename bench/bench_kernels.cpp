@@ -58,6 +58,44 @@ void BM_CensusCostPlanes(benchmark::State& st) {
   st.SetItemsProcessed(st.iterations() * kW * 64);
 }
 
+// Byte-plane census layout (backends that have it): the census row, and all 64 cost planes of a
+// row in one call.
+void BM_CensusPlanesRow(benchmark::State& st) {
+  const auto* k = kernelsOrSkip(st);
+  if (!k) return;
+  if (k->censusPlanesRow == nullptr) {
+    st.SkipWithError("no byte-plane census in this backend");
+    return;
+  }
+  AlignedBuffer<std::uint8_t> img(static_cast<std::size_t>((kW + 16) * 8));
+  fillRandom(img, 1, 256);
+  AlignedBuffer<std::uint8_t> out(static_cast<std::size_t>(8 * kW));
+  for (auto _ : st) {
+    k->censusPlanesRow(img.data(), kW + 16, kW, 9, 7, out.data(), kW);
+    benchmark::ClobberMemory();
+  }
+  st.SetItemsProcessed(st.iterations() * kW);
+}
+
+void BM_CensusPlanesCost64(benchmark::State& st) {
+  const auto* k = kernelsOrSkip(st);
+  if (!k) return;
+  if (k->censusPlanesCostRows == nullptr) {
+    st.SkipWithError("no byte-plane census in this backend");
+    return;
+  }
+  const std::ptrdiff_t ps = kW + 64;  // plane stride, x = 0 at 64
+  AlignedBuffer<std::uint8_t> l(static_cast<std::size_t>(8 * ps)), r(l.size());
+  fillRandom(l, 2, 256);
+  fillRandom(r, 3, 256);
+  AlignedBuffer<std::uint8_t> cost(static_cast<std::size_t>(64 * kW));
+  for (auto _ : st) {
+    k->censusPlanesCostRows(l.data() + 64, r.data() + 64, ps, 8, kW, 0, 64, cost.data(), kW);
+    benchmark::ClobberMemory();
+  }
+  st.SetItemsProcessed(st.iterations() * kW * 64);
+}
+
 void BM_AddSubBoxPlanes(benchmark::State& st) {
   const auto* k = kernelsOrSkip(st);
   if (!k) return;
@@ -106,6 +144,8 @@ void backends(benchmark::internal::Benchmark* b) {
 
 BENCHMARK(BM_CensusRow)->Apply(backends);
 BENCHMARK(BM_CensusCostPlanes)->Apply(backends);
+BENCHMARK(BM_CensusPlanesRow)->Apply(backends);
+BENCHMARK(BM_CensusPlanesCost64)->Apply(backends);
 BENCHMARK(BM_AddSubBoxPlanes)->Apply(backends);
 BENCHMARK(BM_WtaPlanes)->Apply([](benchmark::internal::Benchmark* b) {
   for (auto be : {simd::Backend::kScalar, simd::Backend::kAvx2, simd::Backend::kAvx512, simd::Backend::kNeon})
