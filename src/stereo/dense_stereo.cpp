@@ -35,6 +35,8 @@ struct DenseStereo::Stripe {
   std::vector<std::uint8_t> low_texture;  // 1 where the window's mean gradient is too low
   std::vector<std::uint8_t> grad;
   std::vector<std::uint32_t> prefilter_scratch;  // column sums of the mean-removal prefilter
+  AlignedBuffer<std::uint8_t> census_planes;  // one row of byte-plane census, left then right
+  int census_row = -1;                        // image row held in census_planes, -1 if none
   DenseStereoStats stats;
 
   simd::WtaRowState state() {
@@ -88,10 +90,10 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
   row_stride_ = roundUp(right_pad_ + width + 8, 64);
   const std::size_t rows_n =
       static_cast<std::size_t>(row_stride_) * static_cast<std::size_t>(height);
-  if (census) {
+  if (census && !census_planes_) {
     census_left_.resize(rows_n);
     census_right_.resize(rows_n);
-  } else {
+  } else if (!census) {
     filt_left_.resize(rows_n);
     filt_right_.resize(rows_n);
   }
@@ -118,6 +120,8 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
     st->tex_col.assign(static_cast<std::size_t>(width), 0);
     st->low_texture.assign(static_cast<std::size_t>(width), 0);
     st->grad.assign(static_cast<std::size_t>(width), 0);
+    if (census && census_planes_)
+      st->census_planes.resize(static_cast<std::size_t>(16 * row_stride_));
     st->prefilter_scratch.assign(static_cast<std::size_t>(width + params_.prefilter_size), 0);
     stripes_.push_back(std::move(st));
   }
@@ -148,17 +152,7 @@ void DenseStereo::prepareRows(Stripe& s) {
       const std::uint8_t* win =
           center - (params_.census_h / 2) * padded.stride() - params_.census_w / 2;
       if (census && census_planes_) {
-        // The row's row_stride_ words hold 8 byte planes of row_stride_ bytes.
-        std::uint8_t* out = censusPlanes(side, y);
-        k_->censusPlanesRow(win, padded.stride(), width_, params_.census_w, params_.census_h, out,
-                            row_stride_);
-        if (side == 1) {
-          for (int j = 0; j < 8; ++j) {
-            std::uint8_t* plane = out + j * row_stride_;
-            std::memset(plane - right_pad_, plane[0], static_cast<std::size_t>(right_pad_));
-          }
-        }
-      } else if (census) {
+        break;  // byte-plane census rows are made in matchRows, where the costs need them      } else if (census) {
         std::uint64_t* out = (side == 0 ? census_left_ : census_right_).data() + off;
         k_->censusRow(win, padded.stride(), width_, params_.census_w, params_.census_h, out);
         if (side == 1) std::fill(out - right_pad_, out, out[0]);
@@ -182,12 +176,22 @@ void DenseStereo::prepareRows(Stripe& s) {
   }
 }
 
-std::uint8_t* DenseStereo::censusPlanes(int side, int row) const {
-  const std::uint64_t* words = (side == 0 ? census_left_ : census_right_).data() +
-                               static_cast<std::size_t>(row) * static_cast<std::size_t>(row_stride_);
-  // The buffers are owned (non-const) by this object; the byte view starts at the row's first
-  // word, x = 0 sits right_pad_ bytes into each plane.
-  return const_cast<std::uint8_t*>(reinterpret_cast<const std::uint8_t*>(words)) + right_pad_;
+void DenseStereo::censusPlanesRow(Stripe& s, int row, std::uint8_t* (&out)[2]) const {
+  for (int side = 0; side < 2; ++side)
+    out[side] = s.census_planes.data() + side * 8 * row_stride_ + right_pad_;
+  if (s.census_row == row) return;
+  for (int side = 0; side < 2; ++side) {
+    const ImageU8& padded = side == 0 ? padded_left_ : padded_right_;
+    const std::uint8_t* win = padded.row(row + pad_y_ - params_.census_h / 2) + pad_x_ -
+                              params_.census_w / 2;
+    k_->censusPlanesRow(win, padded.stride(), width_, params_.census_w, params_.census_h,
+                        out[side], row_stride_);
+  }
+  for (int j = 0; j < 8; ++j) {  // right planes: x < 0 replicates x = 0 (read at x - d)
+    std::uint8_t* plane = out[1] + j * row_stride_;
+    std::memset(plane - right_pad_, plane[0], static_cast<std::size_t>(right_pad_));
+  }
+  s.census_row = row;
 }
 
 std::uint8_t* DenseStereo::ringPlane(Stripe& s, int row, int i) const {
@@ -214,7 +218,9 @@ void DenseStereo::ensureCostRow(Stripe& s, int row) const {
   if (held == row) return;
   if (params_.cost == MatchingCost::kCensus && census_planes_) {
     // All planes of the row at once (ring planes of a row are ring_stride_ apart).
-    k_->censusPlanesCostRows(censusPlanes(0, row), censusPlanes(1, row), row_stride_,
+    std::uint8_t* cen[2];
+    censusPlanesRow(s, row, cen);
+    k_->censusPlanesCostRows(cen[0], cen[1], row_stride_,
                              census_nplanes_, width_, params_.min_disp, params_.numDisp(),
                              ringPlane(s, row, 0), ring_stride_);
   } else {
@@ -233,6 +239,7 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
   const bool use_texture = params_.texture_threshold > 0.0f;
   const double texture_limit = static_cast<double>(params_.texture_threshold) * 2.0 * area;
   std::fill(s.ring_row.begin(), s.ring_row.end(), -1);
+  s.census_row = -1;  // a new frame: no census row is current
   simd::FinalizeCounts counts;
   simd::FinalizeParams fin{};
   fin.num_disp = D;
@@ -295,7 +302,9 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       if (planes_block) {
         // The block's cost planes of the entering row in one pass (left census in registers);
         // they are consumed right below while still in L1.
-        k_->censusPlanesCostRows(censusPlanes(0, new_row), censusPlanes(1, new_row), row_stride_,
+        std::uint8_t* cen[2];
+        censusPlanesRow(s, new_row, cen);
+        k_->censusPlanesCostRows(cen[0], cen[1], row_stride_,
                                  census_nplanes_, W, d0 + i0, n, ringPlane(s, new_row, i0),
                                  ring_stride_);
       }

@@ -111,8 +111,9 @@ class DenseStereo {
   void prepareRows(Stripe& s);  // census or prefilter rows [s.y0, s.y1) of both images
   void matchRows(Stripe& s, DisparityResult& out);
   std::uint8_t* ringPlane(Stripe& s, int row, int i) const;
-  // Byte-plane census view of a row (side 0 left, 1 right): plane j at + j * row_stride_.
-  std::uint8_t* censusPlanes(int side, int row) const;  // cost plane i of a row in the ring
+  // Byte-plane census of image row `row` (left at [0], right at [1]; plane j at + j * row_stride_,
+  // x = 0 at + right_pad_), computed into the stripe's scratch when not already there.
+  void censusPlanesRow(Stripe& s, int row, std::uint8_t* (&out)[2]) const;
   void computeCostPlane(Stripe& s, int row, int i) const;
   void ensureCostRow(Stripe& s, int row) const;  // all planes of a row present in the ring
 
