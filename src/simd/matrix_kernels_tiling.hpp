@@ -17,14 +17,26 @@ namespace svslam::simd {
 namespace {
 
 template <int W>
-void packPanels(const double* X, std::ptrdiff_t ldx, int n, int r, double* out) {
+void packPanels(const double* __restrict__ X, std::ptrdiff_t ldx, int n, int r,
+                double* __restrict__ out) {
+  // Groups of kGroup panels, column by column within a group: reads of X run along its columns
+  // and the writes stay within kGroup output streams.
+  constexpr int kGroup = 8;
   const int panels = (n + W - 1) / W;
-  for (int p = 0; p < panels; ++p)
-    for (int k = 0; k < r; ++k)
-      for (int t = 0; t < W; ++t) {
-        const int i = p * W + t;
-        out[(static_cast<std::ptrdiff_t>(p) * r + k) * W + t] = i < n ? X[i + k * ldx] : 0.0;
+  for (int p0 = 0; p0 < panels; p0 += kGroup) {
+    const int p1 = std::min(panels, p0 + kGroup);
+    for (int k = 0; k < r; ++k) {
+      const double* __restrict__ x = X + k * ldx;
+      for (int p = p0; p < p1; ++p) {
+        double* __restrict__ o = out + (static_cast<std::ptrdiff_t>(p) * r + k) * W;
+        if (p * W + W <= n) {
+          for (int t = 0; t < W; ++t) o[t] = x[p * W + t];
+        } else {
+          for (int t = 0; t < W; ++t) o[t] = p * W + t < n ? x[p * W + t] : 0.0;
+        }
       }
+    }
+  }
 }
 
 template <class Micro>
