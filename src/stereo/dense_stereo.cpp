@@ -152,7 +152,8 @@ void DenseStereo::prepareRows(Stripe& s) {
       const std::uint8_t* win =
           center - (params_.census_h / 2) * padded.stride() - params_.census_w / 2;
       if (census && census_planes_) {
-        break;  // byte-plane census rows are made in matchRows, where the costs need them      } else if (census) {
+        break;  // byte-plane census rows are made in matchRows, where the costs need them
+      } else if (census) {
         std::uint64_t* out = (side == 0 ? census_left_ : census_right_).data() + off;
         k_->censusRow(win, padded.stride(), width_, params_.census_w, params_.census_h, out);
         if (side == 1) std::fill(out - right_pad_, out, out[0]);
