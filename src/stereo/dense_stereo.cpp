@@ -62,7 +62,8 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
     return;
   }
   k_ = &simd::kernels(params_.backend);
-  census_planes_ = k_->censusPlanesRow != nullptr && k_->censusPlanesCostRows != nullptr;
+  census_planes_ = params_.census_byte_planes && k_->censusPlanesRow != nullptr &&
+                   k_->censusPlanesCostRows != nullptr;
   census_nplanes_ = (params_.census_w * params_.census_h - 1 + 7) / 8;
   {
     // sigma_d for every possible parabola curvature numerator v = c- + c+ - 2 c0 (an integer up

@@ -60,6 +60,9 @@ struct DenseStereoParams {
   bool subpixel = true;            // parabola fit; false gives integer disparities
   int num_stripes = 1;             // row stripes processed as independent tasks, 1..256
   simd::Backend backend = simd::Backend::kAuto;
+  // Census in byte planes when the backend has those kernels (faster); false forces the 64-bit
+  // word layout (the one AVX-512 and NEON use). Same results either way (tests compare them).
+  bool census_byte_planes = true;
   SigmaModel sigma_model = SigmaModel::defaultCensus();
 
   // Empty status when every field is in range; otherwise names the offending field.
