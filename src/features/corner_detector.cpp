@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "simd/float_row_kernels.hpp"
+
 namespace svslam {
 namespace {
 
@@ -41,7 +43,7 @@ void horizontalRows(ImageView<const T> in, const std::vector<float>& kx, ImageF3
     for (int k = -rx; k <= rx; ++k) {
       const float c = kx[static_cast<std::size_t>(k + rx)];
       const float* p = pad + rx - k;
-      for (int x = 0; x < w; ++x) t[x] += c * p[x];
+      simd::floatRowKernels().axpy(t, p, c, w);
     }
   }
 }
@@ -56,7 +58,7 @@ void verticalRows(const ImageF32& tmp, const std::vector<float>& ky, ImageF32& o
     for (int k = -ry; k <= ry; ++k) {
       const float c = ky[static_cast<std::size_t>(k + ry)];
       const float* t = tmp.row(std::clamp(y - k, 0, h - 1));
-      for (int x = 0; x < w; ++x) o[x] += c * t[x];
+      simd::floatRowKernels().axpy(o, t, c, w);
     }
   }
 }
@@ -133,11 +135,7 @@ Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<
     float* xx = ixx_.row(y);
     float* yy = iyy_.row(y);
     float* xy = ixy_.row(y);
-    for (int x = 0; x < width_; ++x) {
-      xx[x] = gx[x] * gx[x];
-      yy[x] = gy[x] * gy[x];
-      xy[x] = gx[x] * gy[x];
-    }
+    simd::floatRowKernels().products(gx, gy, xx, yy, xy, width_);
   }
   });
   convolve<float>(ixx_.cview(), ki_, ki_, ixx_, executor);

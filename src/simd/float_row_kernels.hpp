@@ -1,0 +1,25 @@
+#pragma once
+// Float row kernels of the corner detector (separable convolution taps and gradient products),
+// one table per instruction set, chosen at run time.
+//
+// Each output element is computed by the same IEEE single-precision operations in the same order
+// on every backend (a multiply then an add, never fused: the AVX2 variant is compiled without
+// FMA), so the backends give identical bits; tests hold them to it.
+#include "simd/stereo_kernels.hpp"  // Backend
+
+namespace svslam::simd {
+
+struct FloatRowKernels {
+  Backend backend;
+  const char* name;
+  // t[x] = t[x] + c * p[x] for x in [0, n). The arrays do not overlap (nor do those of products).
+  void (*axpy)(float* t, const float* p, float c, int n);
+  // xx[x] = gx[x]^2, yy[x] = gy[x]^2, xy[x] = gx[x] gy[x] for x in [0, n).
+  void (*products)(const float* gx, const float* gy, float* xx, float* yy, float* xy, int n);
+};
+
+bool floatRowBackendAvailable(Backend b);  // kAuto and kScalar: always; kAvx2 on x86 with AVX2
+// The fastest available backend's table (kAuto), or backend b's (scalar when unavailable).
+const FloatRowKernels& floatRowKernels(Backend b = Backend::kAuto);
+
+}  // namespace svslam::simd
