@@ -199,8 +199,11 @@ Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<
       cells[static_cast<std::size_t>(cy * params_.grid_cols + cx)].push_back(cn);
     }
   for (auto& cell : cells) {
-    std::stable_sort(cell.begin(), cell.end(),
-                     [](const Corner& a, const Corner& c) { return a.response > c.response; });
+    // Ties keep raster order (the order of insertion), as a stable sort would, without its buffer.
+    std::sort(cell.begin(), cell.end(), [](const Corner& a, const Corner& c) {
+      if (a.response != c.response) return a.response > c.response;
+      return a.y_px != c.y_px ? a.y_px < c.y_px : a.x_px < c.x_px;
+    });
     const std::size_t keep = std::min(cell.size(), static_cast<std::size_t>(params_.max_per_cell));
     out.insert(out.end(), cell.begin(), cell.begin() + static_cast<std::ptrdiff_t>(keep));
   }

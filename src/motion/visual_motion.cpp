@@ -103,7 +103,9 @@ Status VisualMotion::process(const std::vector<PointPair>& pairs, VisualMotionRe
     std::mt19937_64 rng(params_.seed);
     std::uniform_int_distribution<std::size_t> pick(0, active_.size() - 1);
     std::size_t best_count = 0;
-    std::vector<int> sample(3), inl;
+    std::vector<int>& sample = sample_;
+    std::vector<int>& inl = inliers_;
+    sample.assign(3, 0);
     for (int it = 0; it < params_.ransac_iterations; ++it) {
       for (int& s : sample) s = active_[pick(rng)];
       if (sample[0] == sample[1] || sample[1] == sample[2] || sample[0] == sample[2]) continue;
@@ -116,12 +118,13 @@ Status VisualMotion::process(const std::vector<PointPair>& pairs, VisualMotionRe
         T = H;
       }
     }
-    std::vector<int> kept;
+    std::vector<int>& kept = kept_;
+    kept.clear();
     for (int i : active_)
       if (mahalanobis2(i, T) < params_.ransac_chi2) kept.push_back(i);
     if (static_cast<int>(kept.size()) < params_.min_inliers)
       return Status::failedPrecondition("visual motion: RANSAC found too few inliers");
-    active_ = kept;
+    active_.swap(kept);
   } else {
     T = weightedUmeyama(pairs, active_, weight_);
   }
@@ -154,18 +157,20 @@ Status VisualMotion::process(const std::vector<PointPair>& pairs, VisualMotionRe
   for (int k = params_.k_start; k >= 3; --k) {
     refine();
     double mean = 0;
-    std::vector<double> res(active_.size());
+    std::vector<double>& res = residuals_;
+    res.resize(active_.size());
     for (std::size_t j = 0; j < active_.size(); ++j) {
       res[j] = std::sqrt(mahalanobis2(active_[j], T));
       mean += res[j];
     }
     mean /= static_cast<double>(active_.size());
-    std::vector<int> kept;
+    std::vector<int>& kept = kept_;
+    kept.clear();
     for (std::size_t j = 0; j < active_.size(); ++j)
       if (res[j] <= std::max(k * mean, params_.reject_floor)) kept.push_back(active_[j]);
     if (static_cast<int>(kept.size()) < params_.min_inliers)
       return Status::failedPrecondition("visual motion: too few points after outlier rejection");
-    active_ = kept;
+    active_.swap(kept);
   }
   refine();
 

@@ -67,6 +67,9 @@ class VisualMotion {
   Status init_status_;
   std::vector<int> active_;
   std::vector<double> weight_;
+  // Scratch kept across calls (no allocation per frame once grown).
+  std::vector<int> sample_, inliers_, kept_;
+  std::vector<double> residuals_;
 };
 
 // Exponential map of a rotation vector (rad) and its inverse.

@@ -15,21 +15,38 @@ namespace {
 
 using Eigen::Lower;
 
-// A symmetric (relative tolerance 1e-9) positive semi-definite (or definite when `definite`)
-// finite matrix; returns a message naming `what` otherwise.
+// What is wrong with a covariance, if anything: it must be finite, symmetric (relative tolerance
+// 1e-9) and positive semi-definite (definite when `definite`).
+enum class CovarianceFault { kNone, kNonFinite, kAsymmetric, kNotPositive };
+
+template <int N>
+CovarianceFault covarianceFault(const Eigen::Matrix<double, N, N>& C, bool definite) {
+  if (!C.allFinite()) return CovarianceFault::kNonFinite;
+  const double scale = C.cwiseAbs().maxCoeff();
+  if ((C - C.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale)
+    return CovarianceFault::kAsymmetric;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(C, Eigen::EigenvaluesOnly);
+  const double min_eig = es.eigenvalues()(0);
+  if (definite ? !(min_eig > 0) : min_eig < -1e-12 * scale) return CovarianceFault::kNotPositive;
+  return CovarianceFault::kNone;
+}
+
+// covarianceFault with a message naming `what`.
 template <int N>
 Status checkCovariance(const Eigen::Matrix<double, N, N>& C, bool definite,
                        const std::string& what) {
-  if (!C.allFinite()) return Status::invalidArgument(what + " has non-finite entries");
-  const double scale = C.cwiseAbs().maxCoeff();
-  if ((C - C.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale)
-    return Status::invalidArgument(what + " is not symmetric");
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(C, Eigen::EigenvaluesOnly);
-  const double min_eig = es.eigenvalues()(0);
-  if (definite ? !(min_eig > 0) : min_eig < -1e-12 * scale)
-    return Status::invalidArgument(
-        what + (definite ? " is not positive definite" : " is not positive semi-definite"));
-  return Status::ok();
+  switch (covarianceFault<N>(C, definite)) {
+    case CovarianceFault::kNone:
+      return Status::ok();
+    case CovarianceFault::kNonFinite:
+      return Status::invalidArgument(what + " has non-finite entries");
+    case CovarianceFault::kAsymmetric:
+      return Status::invalidArgument(what + " is not symmetric");
+    case CovarianceFault::kNotPositive:
+      break;
+  }
+  return Status::invalidArgument(
+      what + (definite ? " is not positive definite" : " is not positive semi-definite"));
 }
 
 Status checkRigid(const Eigen::Isometry3d& T, const std::string& what) {
@@ -148,12 +165,15 @@ Status EkfSlam::predict(const Eigen::Isometry3d& T_cur_prev, const Matrix6d& R_u
 }
 
 Status EkfSlam::checkObservations(const std::vector<LandmarkObservation>& obs) const {
+  // Messages are built only on failure (this runs every frame).
+  const auto what = [](std::size_t k) { return "update: observation " + std::to_string(k); };
   for (std::size_t k = 0; k < obs.size(); ++k) {
-    const std::string what = "update: observation " + std::to_string(k);
     if (slotOf(obs[k].id) < 0)
-      return Status::invalidArgument(what + ": unknown landmark id " + std::to_string(obs[k].id));
-    if (!obs[k].z_cam.allFinite()) return Status::invalidArgument(what + ": z_cam is not finite");
-    if (Status s = checkCovariance<3>(obs[k].R, true, what + ": R"); !s) return s;
+      return Status::invalidArgument(what(k) + ": unknown landmark id " +
+                                     std::to_string(obs[k].id));
+    if (!obs[k].z_cam.allFinite()) return Status::invalidArgument(what(k) + ": z_cam is not finite");
+    if (covarianceFault<3>(obs[k].R, true) != CovarianceFault::kNone)
+      return checkCovariance<3>(obs[k].R, true, what(k) + ": R");
   }
   return Status::ok();
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "features/patch_similarity.hpp"
 #include "stereo/reprojection.hpp"
@@ -85,6 +86,9 @@ float parabolaOffset(float m, float c, float p) {
   return den < 0.0f ? std::clamp(0.5f * (m - p) / den, -0.5f, 0.5f) : 0.0f;
 }
 
+// A sort key with NaN (never expected) placed last, so comparisons stay a strict weak order.
+double orderKey(double v) { return std::isnan(v) ? std::numeric_limits<double>::infinity() : v; }
+
 struct Prediction {
   int id = -1;
   double u = 0, v = 0, d = 0;  // predicted pixel and disparity
@@ -92,6 +96,7 @@ struct Prediction {
   double sigma_d = 0;          // of the disparity
   Eigen::Vector3d z_cam = Eigen::Vector3d::Zero();  // predicted point in the camera frame
   bool tracked = false;        // observed in the previous frame
+  int order = 0;               // position in the state: ties keep it (std::sort, no buffer)
 };
 
 }  // namespace
@@ -139,16 +144,23 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     pr.sigma_px = std::sqrt(std::max({Cuvd(0, 0), Cuvd(1, 1), 0.0}));
     pr.sigma_d = std::sqrt(std::max(Cuvd(2, 2), 0.0));
     pr.tracked = landmarks_.info(id).last_seen_frame == frame_ - 1;
+    pr.order = static_cast<int>(preds.size());
     preds.push_back(pr);
     ++out.predicted_visible;
   }
   // Order of the searches: re-perceptions first (the best predicted first, at most
   // max_reperceptions: they close loops), then the tracked landmarks, oldest first (they carry
   // the longest memory); at most max_observations observations per frame (bounded update cost).
-  std::stable_sort(preds.begin(), preds.end(), [&](const Prediction& a, const Prediction& c) {
+  std::sort(preds.begin(), preds.end(), [&](const Prediction& a, const Prediction& c) {
     if (a.tracked != c.tracked) return !a.tracked;
-    if (!a.tracked) return a.sigma_px < c.sigma_px;
-    return landmarks_.info(a.id).created_frame < landmarks_.info(c.id).created_frame;
+    if (!a.tracked) {
+      const double sa = orderKey(a.sigma_px), sc = orderKey(c.sigma_px);
+      if (sa != sc) return sa < sc;
+    } else {
+      const int fa = landmarks_.info(a.id).created_frame, fc = landmarks_.info(c.id).created_frame;
+      if (fa != fc) return fa < fc;
+    }
+    return a.order < c.order;
   });
   int reperceptions = 0;
   for (const Prediction& pr : preds) {
@@ -320,8 +332,10 @@ void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameRe
     if (t.track_len == 2 && !t.candidate && patchInside(left, x, y, h + 1) && !nearObserved(pts[j]))
       fresh.push_back(static_cast<int>(j));
   }
-  std::stable_sort(fresh.begin(), fresh.end(), [&](int a, int c) {
-    return sigmaOf(pts[static_cast<std::size_t>(a)]) < sigmaOf(pts[static_cast<std::size_t>(c)]);
+  std::sort(fresh.begin(), fresh.end(), [&](int a, int c) {  // ties: ascending index, as inserted
+    const double sa = orderKey(sigmaOf(pts[static_cast<std::size_t>(a)])),
+                 sc = orderKey(sigmaOf(pts[static_cast<std::size_t>(c)]));
+    return sa != sc ? sa < sc : a < c;
   });
   const int quota =
       static_cast<int>(std::ceil(params_.candidate_fraction * static_cast<double>(fresh.size())));
