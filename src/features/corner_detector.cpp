@@ -22,44 +22,41 @@ std::vector<float> gaussian(double sigma, bool derivative) {
   return k;
 }
 
+// Taps of the largest kernel: radius ceil(3 sigma) with sigma <= 10 px (CornerParams::validate).
+constexpr int kMaxTaps = 64;
+
 // Separable convolution with replicated borders: horizontal kernel kx, then vertical ky,
 //   tmp(x, y) = sum_k kx[k + rx] in(x - k, y),   out(x, y) = sum_k ky[k + ry] tmp(x, y - k),
-// coordinates clamped to the image. Loops run over x innermost so they vectorise; `row` is
-// scratch space of at least w + 2 rx floats. Rows [y0, y1) of one pass.
+// coordinates clamped to the image, each output summed in tap order (simd::FloatRowKernels::
+// convolve); `row` is scratch space of at least w + 2 rx floats. Rows [y0, y1) of one pass.
 template <class T>
 void horizontalRows(ImageView<const T> in, const std::vector<float>& kx, ImageF32& tmp,
                     std::vector<float>& row, int y0, int y1) {
   const int w = in.width;
   const int rx = static_cast<int>(kx.size() / 2);
   row.resize(static_cast<std::size_t>(w + 2 * rx));
+  const simd::FloatRowKernels& k = simd::floatRowKernels();
+  const float* taps[kMaxTaps];
   for (int y = y0; y < y1; ++y) {
     const T* src = in.row(y);
     float* pad = row.data();  // pad[i] = in(clamp(i - rx), y)
     for (int i = 0; i < rx; ++i) pad[i] = static_cast<float>(src[0]);
     for (int x = 0; x < w; ++x) pad[x + rx] = static_cast<float>(src[x]);
     for (int i = 0; i < rx; ++i) pad[w + rx + i] = static_cast<float>(src[w - 1]);
-    float* t = tmp.row(y);
-    for (int x = 0; x < w; ++x) t[x] = 0.0f;
-    for (int k = -rx; k <= rx; ++k) {
-      const float c = kx[static_cast<std::size_t>(k + rx)];
-      const float* p = pad + rx - k;
-      simd::floatRowKernels().axpy(t, p, c, w);
-    }
+    for (int j = 0; j <= 2 * rx; ++j) taps[j] = pad + 2 * rx - j;  // tap j - rx: pad + rx - (j - rx)
+    k.convolve(taps, kx.data(), 2 * rx + 1, tmp.row(y), w);
   }
 }
 
 void verticalRows(const ImageF32& tmp, const std::vector<float>& ky, ImageF32& out, int y0,
                   int y1) {
-  const int w = tmp.width(), h = tmp.height();
+  const int h = tmp.height();
   const int ry = static_cast<int>(ky.size() / 2);
+  const simd::FloatRowKernels& k = simd::floatRowKernels();
+  const float* taps[kMaxTaps];
   for (int y = y0; y < y1; ++y) {
-    float* o = out.row(y);
-    for (int x = 0; x < w; ++x) o[x] = 0.0f;
-    for (int k = -ry; k <= ry; ++k) {
-      const float c = ky[static_cast<std::size_t>(k + ry)];
-      const float* t = tmp.row(std::clamp(y - k, 0, h - 1));
-      simd::floatRowKernels().axpy(o, t, c, w);
-    }
+    for (int j = 0; j <= 2 * ry; ++j) taps[j] = tmp.row(std::clamp(y - (j - ry), 0, h - 1));
+    k.convolve(taps, ky.data(), 2 * ry + 1, out.row(y), tmp.width());
   }
 }
 

@@ -14,6 +14,9 @@ struct FloatRowKernels {
   const char* name;
   // t[x] = t[x] + c * p[x] for x in [0, n). The arrays do not overlap (nor do those of products).
   void (*axpy)(float* t, const float* p, float c, int n);
+  // out[x] = sum_{k=0}^{taps-1} c[k] rows[k][x] for x in [0, n), accumulated from 0.0f in the
+  // order k = 0, 1, .. (each product rounded, then added). out does not overlap the rows.
+  void (*convolve)(const float* const* rows, const float* c, int taps, float* out, int n);
   // xx[x] = gx[x]^2, yy[x] = gy[x]^2, xy[x] = gx[x] gy[x] for x in [0, n).
   void (*products)(const float* gx, const float* gy, float* xx, float* yy, float* xy, int n);
 };

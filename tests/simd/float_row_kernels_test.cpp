@@ -36,6 +36,14 @@ TEST(FloatRowKernels, ReferenceComputesTheDefinition) {
   EXPECT_EQ(xx[5], t[5] * t[5]);
   EXPECT_EQ(yy[6], p[6] * p[6]);
   EXPECT_EQ(xy[7], t[7] * p[7]);
+  // convolve = zero, then axpy per tap in order.
+  const std::vector<float> r0 = randomRow(37, 3), r1 = randomRow(37, 4), r2 = randomRow(37, 5);
+  const float* rows[3] = {r0.data(), r1.data(), r2.data()};
+  const float c[3] = {0.25f, -1.5f, 0.7f};
+  std::vector<float> out(37), expect(37, 0.0f);
+  k.convolve(rows, c, 3, out.data(), 37);
+  for (int j = 0; j < 3; ++j) k.axpy(expect.data(), rows[j], c[j], 37);
+  EXPECT_TRUE(sameBits(out, expect));
 }
 
 TEST(FloatRowKernels, EveryAvailableBackendIsBitExactWithTheReference) {
@@ -61,6 +69,20 @@ TEST(FloatRowKernels, EveryAvailableBackendIsBitExactWithTheReference) {
         k.products(a.data() + off, p.data() + off, s[0].data(), s[1].data(), s[2].data(), n);
         for (int i = 0; i < 3; ++i)
           ASSERT_TRUE(sameBits(r[i], s[i])) << k.name << " products, n = " << n;
+        for (int taps : {1, 7, 13, 61}) {
+          std::vector<std::vector<float>> src;
+          std::vector<const float*> rows;
+          std::vector<float> c;
+          for (int j = 0; j < taps; ++j) {
+            src.push_back(randomRow(n + off, static_cast<unsigned>(100 * j + n)));
+            c.push_back(0.01f * static_cast<float>(j % 9) - 0.033f);
+          }
+          for (const auto& v : src) rows.push_back(v.data() + off);
+          std::vector<float> o1(static_cast<std::size_t>(n)), o2(o1);
+          ref.convolve(rows.data(), c.data(), taps, o1.data(), n);
+          k.convolve(rows.data(), c.data(), taps, o2.data(), n);
+          ASSERT_TRUE(sameBits(o1, o2)) << k.name << " convolve, n = " << n << ", taps " << taps;
+        }
       }
   }
   if (tested == 0) GTEST_SKIP() << "no SIMD float row backend runs on this CPU; reference only";
