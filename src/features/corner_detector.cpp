@@ -146,14 +146,7 @@ Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<
     const float* ra = ixx_.row(y);
     const float* rb = ixy_.row(y);
     const float* rc = iyy_.row(y);
-    float* rr = resp_.row(y);
-    for (int x = 0; x < width_; ++x) {
-      const double a = ra[x], b = rb[x], c = rc[x];
-      const double r = harris ? a * c - b * b - k * (a + c) * (a + c)
-                              : 0.5 * (a + c) - std::sqrt(0.25 * (a - c) * (a - c) + b * b);
-      rr[x] = static_cast<float>(r);
-      max_r = std::max(max_r, rr[x]);
-    }
+    max_r = simd::floatRowKernels().response(ra, rb, rc, harris, k, resp_.row(y), width_, max_r);
   }
   stripe_max_[static_cast<std::size_t>(i)] = max_r;
   });

@@ -19,6 +19,12 @@ struct FloatRowKernels {
   void (*convolve)(const float* const* rows, const float* c, int taps, float* out, int n);
   // xx[x] = gx[x]^2, yy[x] = gy[x]^2, xy[x] = gx[x] gy[x] for x in [0, n).
   void (*products)(const float* gx, const float* gy, float* xx, float* yy, float* xy, int n);
+  // Corner response of the structure tensor [a b; b c] per pixel, in double, rounded to float:
+  //   harris: a c - b^2 - k (a + c)^2          (evaluated as ((a c - b b) - (k (a + c)) (a + c)))
+  //   else (Shi-Tomasi): (a + c) / 2 - sqrt((a - c)^2 / 4 + b^2), the smaller eigenvalue.
+  // Returns max(max_in, out[0..n)) (NaN responses, never expected, do not raise it).
+  float (*response)(const float* a, const float* b, const float* c, bool harris, double k,
+                    float* out, int n, float max_in);
 };
 
 bool floatRowBackendAvailable(Backend b);  // kAuto and kScalar: always; kAvx2 on x86 with AVX2

@@ -2,6 +2,8 @@
 // portable reference, on odd lengths and unaligned starts; the reference computes the definition.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <vector>
@@ -44,6 +46,15 @@ TEST(FloatRowKernels, ReferenceComputesTheDefinition) {
   k.convolve(rows, c, 3, out.data(), 37);
   for (int j = 0; j < 3; ++j) k.axpy(expect.data(), rows[j], c[j], 37);
   EXPECT_TRUE(sameBits(out, expect));
+  // response: the formulas, and the running maximum.
+  const float a[2] = {4.0f, 1.0f}, b[2] = {1.0f, 0.0f}, cc[2] = {2.0f, 1.0f};
+  float r[2];
+  const float mh = k.response(a, b, cc, true, 0.04, r, 2, 0.0f);
+  EXPECT_EQ(r[0], static_cast<float>(4.0 * 2.0 - 1.0 - 0.04 * 6.0 * 6.0));
+  EXPECT_EQ(mh, std::max(r[0], r[1]));
+  k.response(a, b, cc, false, 0.04, r, 2, 0.0f);
+  EXPECT_EQ(r[0], static_cast<float>(3.0 - std::sqrt(1.0 + 1.0)));  // smaller eigenvalue
+  EXPECT_EQ(r[1], 1.0f);
 }
 
 TEST(FloatRowKernels, EveryAvailableBackendIsBitExactWithTheReference) {
@@ -69,6 +80,18 @@ TEST(FloatRowKernels, EveryAvailableBackendIsBitExactWithTheReference) {
         k.products(a.data() + off, p.data() + off, s[0].data(), s[1].data(), s[2].data(), n);
         for (int i = 0; i < 3; ++i)
           ASSERT_TRUE(sameBits(r[i], s[i])) << k.name << " products, n = " << n;
+        for (bool harris : {true, false}) {
+          // Structure-tensor-like inputs: a, c >= 0; b of either sign.
+          std::vector<float> ta(a), tc(p), ro1(static_cast<std::size_t>(n + off)), ro2(ro1);
+          for (float& v : ta) v = v * v;
+          for (float& v : tc) v = v * v;
+          const float m1 = ref.response(ta.data() + off, b2.data() + off, tc.data() + off, harris,
+                                        0.04, ro1.data() + off, n, 0.0f);
+          const float m2 = k.response(ta.data() + off, b2.data() + off, tc.data() + off, harris,
+                                      0.04, ro2.data() + off, n, 0.0f);
+          ASSERT_TRUE(sameBits(ro1, ro2)) << k.name << " response, n = " << n;
+          ASSERT_EQ(m1, m2) << k.name << " response maximum, n = " << n;
+        }
         for (int taps : {1, 7, 13, 61}) {
           std::vector<std::vector<float>> src;
           std::vector<const float*> rows;
