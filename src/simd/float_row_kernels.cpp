@@ -126,7 +126,7 @@ bool floatRowBackendAvailable(Backend b) {
   return false;
 }
 
-const FloatRowKernels& floatRowKernels(Backend b) {
+const FloatRowKernels& floatRowKernels([[maybe_unused]] Backend b) {
   static const FloatRowKernels scalar{Backend::kScalar, "scalar", axpyScalar, convolveScalar,
                                         productsScalar, responseScalar};
 #if defined(SVSLAM_FLOAT_ROW_AVX2)
