@@ -6,9 +6,10 @@
 // are the ones passed, so a caller can split the rows of a triangle among threads),
 //     C(i, j) <- C(i, j) - sum_{k=0}^{r-1} A(i, k) B(j, k),
 // with A column-major rows x r and B column-major cols x r, i.e. C -= A B^T. Every element is
-// accumulated in the order k = 0, 1, .., r-1,
-// one fused multiply-add per term (acc <- fma(-A(i, k), B(j, k), acc), rounded once), starting
-// from C(i, j). The scalar reference does exactly that with std::fma; the SIMD backends do the
+// accumulated from acc = 0 in the order k = 0, 1, .., r-1, one fused multiply-add per term
+// (acc <- fma(-A(i, k), B(j, k), acc), rounded once), then C(i, j) <- C(i, j) + acc (C is read
+// only at the end, so its cache misses overlap the sums). The scalar reference does exactly that
+// with std::fma; the SIMD backends do the
 // same sequence lane by lane (FNMADD / FMLS round once and negation is exact), so every backend
 // gives the same bits. With lower_only, the strictly upper triangle of C is never read or written.
 //

@@ -8,7 +8,7 @@ namespace svslam::simd {
 namespace {
 
 // One 8 x 4 block: sixteen 2-double accumulators, per k four loads of A (8 rows) and two of B.
-// acc <- acc - a b with one rounding (FMLS), as std::fma(-a, b, acc).
+// acc <- acc - a b with one rounding (FMLS), as std::fma(-a, b, acc), from zero; then C + acc.
 struct NeonMicro {
   static constexpr int MR = 8, NR = 4;
   // Not inlined: the driver calls it on P and on a small buffer, and an inlined copy on the buffer
@@ -17,7 +17,7 @@ struct NeonMicro {
                                      std::ptrdiff_t ldc) {
     float64x2_t c[NR][4];
     for (int u = 0; u < NR; ++u)
-      for (int v = 0; v < 4; ++v) c[u][v] = vld1q_f64(C + 2 * v + u * ldc);
+      for (int v = 0; v < 4; ++v) c[u][v] = vdupq_n_f64(0.0);
     for (int k = 0; k < r; ++k, a += MR, b += NR) {
       float64x2_t av[4];
       for (int v = 0; v < 4; ++v) av[v] = vld1q_f64(a + 2 * v);
@@ -30,7 +30,10 @@ struct NeonMicro {
       }
     }
     for (int u = 0; u < NR; ++u)
-      for (int v = 0; v < 4; ++v) vst1q_f64(C + 2 * v + u * ldc, c[u][v]);
+      for (int v = 0; v < 4; ++v) {
+        double* p = C + 2 * v + u * ldc;
+        vst1q_f64(p, vaddq_f64(vld1q_f64(p), c[u][v]));  // C + (sum from zero), as the reference
+      }
   }
 };
 

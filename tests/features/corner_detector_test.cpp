@@ -9,6 +9,8 @@
 #include <thread>
 #include <vector>
 
+#include "../core/spawning_executor.hpp"
+
 namespace svslam {
 namespace {
 
@@ -103,20 +105,7 @@ TEST(CornerDetector, BucketingCapsEachCellAndFlatImagesHaveNoCorners) {
 namespace svslam {
 namespace {
 
-// Runs the tasks concurrently on their own threads, last first (any order must give the same).
-class SpawningExecutor final : public Executor {
- public:
-  explicit SpawningExecutor(int n) : n_(n) {}
-  void parallelFor(int num_tasks, const std::function<void(int)>& fn) override {
-    std::vector<std::thread> t;
-    for (int i = num_tasks - 1; i >= 0; --i) t.emplace_back(fn, i);
-    for (auto& th : t) th.join();
-  }
-  int concurrency() const override { return n_; }
-
- private:
-  int n_;
-};
+using test_support::SpawningExecutor;
 
 TEST(CornerDetector, RowStripesOnAnyExecutorGiveIdenticalCorners) {
   // A textured image with odd size: random smooth blobs.

@@ -4,30 +4,18 @@
 
 #include <cstring>
 #include <random>
-#include <thread>
 #include <vector>
 
 #include "motion/visual_motion.hpp"
 #include "slam/ekf_slam.hpp"
 #include "slam/pose_jacobians.hpp"
 
+#include "../core/spawning_executor.hpp"
+
 namespace svslam {
 namespace {
 
-// Runs the tasks on their own threads, started in reverse order.
-class ReverseThreadsExecutor final : public Executor {
- public:
-  explicit ReverseThreadsExecutor(int n) : n_(n) {}
-  void parallelFor(int num_tasks, const std::function<void(int)>& fn) override {
-    std::vector<std::thread> threads;
-    for (int i = num_tasks - 1; i >= 0; --i) threads.emplace_back(fn, i);
-    for (auto& t : threads) t.join();
-  }
-  int concurrency() const override { return n_; }
-
- private:
-  int n_;
-};
+using test_support::SpawningExecutor;
 
 struct Outcome {
   Eigen::MatrixXd P;
@@ -80,7 +68,7 @@ TEST(EkfUpdateTasks, RowPiecesOnAnExecutorGiveTheSameBits) {
   for (bool joseph : {true, false}) {
     const Outcome one = runFilter(joseph, 1, nullptr);
     for (int tasks : {2, 3, 5}) {
-      ReverseThreadsExecutor ex(tasks);
+      SpawningExecutor ex(tasks);
       const Outcome many = runFilter(joseph, tasks, &ex);
       EXPECT_TRUE(sameBits(one.P, many.P)) << (joseph ? "joseph" : "optimal gain") << ", " << tasks;
       EXPECT_TRUE(sameBits(one.T.matrix(), many.T.matrix()));
