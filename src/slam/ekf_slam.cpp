@@ -49,6 +49,12 @@ Status checkCovariance(const Eigen::Matrix<double, N, N>& C, bool definite,
       what + (definite ? " is not positive definite" : " is not positive semi-definite"));
 }
 
+// M <- (M + M^T) / 2 for a square M: exactly symmetric.
+void symmetrise(Eigen::Ref<Eigen::MatrixXd> M) {
+  for (Eigen::Index c = 0; c < M.cols(); ++c)
+    for (Eigen::Index r = c + 1; r < M.rows(); ++r) M(r, c) = M(c, r) = 0.5 * (M(r, c) + M(c, r));
+}
+
 Status checkRigid(const Eigen::Isometry3d& T, const std::string& what) {
   if (!T.matrix().allFinite()) return Status::invalidArgument(what + " has non-finite entries");
   const Eigen::Matrix3d& R = T.linear();
@@ -181,7 +187,6 @@ Status EkfSlam::checkObservations(const std::vector<LandmarkObservation>& obs) c
 Status EkfSlam::update(const std::vector<LandmarkObservation>& obs,
                        std::vector<ObservationResult>& results, Executor* executor) {
   if (!init_status_) return init_status_;
-  executor_ = executor;
   if (Status s = checkObservations(obs); !s) return s;
   results.resize(obs.size());
   // Gating of every observation against the state before any update:
@@ -214,13 +219,15 @@ Status EkfSlam::update(const std::vector<LandmarkObservation>& obs,
     for (; k < obs.size() && accepted_.size() < batch; ++k)
       if (results[k].accepted) accepted_.push_back(static_cast<int>(k));
     if (accepted_.empty()) break;
-    if (Status s = applyBatch(obs, accepted_.data(), static_cast<int>(accepted_.size())); !s)
+    if (Status s = applyBatch(obs, accepted_.data(), static_cast<int>(accepted_.size()), executor);
+        !s)
       return s;
   }
   return Status::ok();
 }
 
-Status EkfSlam::applyBatch(const std::vector<LandmarkObservation>& obs, const int* idx, int count) {
+Status EkfSlam::applyBatch(const std::vector<LandmarkObservation>& obs, const int* idx, int count,
+                           Executor* executor) {
   const int n = stateDim(), m = 3 * count;
   auto M = B_.block(0, 0, n, m);
   auto nu = nu_.head(m);
@@ -248,35 +255,29 @@ Status EkfSlam::applyBatch(const std::vector<LandmarkObservation>& obs, const in
     S.middleRows(3 * i, 3).noalias() += H_m * M.middleRows(6 + 3 * s, 3);
     S.block<3, 3>(3 * i, 3 * i) += o.R;
   }
-  for (int c = 0; c < m; ++c)
-    for (int r = c + 1; r < m; ++r) S(r, c) = S(c, r) = 0.5 * (S(r, c) + S(c, r));
+  symmetrise(S);
   auto L = L_.topLeftCorner(m, m);
   L = S;
   Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(L);
   if (llt.info() != Eigen::Success)
     return Status(StatusCode::kInternal, "update: innovation covariance not positive definite");
-  auto dx = dx_.head(n);
-  auto G = A_.block(0, 0, n, m);  // Joseph: K; optimal gain: B
+  // T = S^-1 (Joseph: explicit, exactly symmetric) or L^-1 (optimal gain); G = M T^T, i.e.
+  // G(i, j) = sum_k M(i, k) T(j, k): the gain K = M S^-1, or B = M L^-T.
   auto T = T_.topLeftCorner(m, m);
   T.setIdentity();
   if (params_.joseph_form) {
-    // K = M S^-1 with the explicit (exactly symmetric) S^-1, D = M - K S.
     llt.solveInPlace(T);
-    for (int c = 0; c < m; ++c)
-      for (int r = c + 1; r < m; ++r) T(r, c) = T(c, r) = 0.5 * (T(r, c) + T(c, r));
-    G.setZero();
-    subtractProduct(G, M, T, false);  // -M S^-1 (S^-1 symmetric: B(j, k) = S^-1(k, j))
-    G = -G;
-    dx.noalias() = G * nu;  // K nu
+    symmetrise(T);
   } else {
-    // B = M L^-T: B(i, j) = sum_k M(i, k) L^-1(j, k).
     llt.matrixL().solveInPlace(T);
-    G.setZero();
-    subtractProduct(G, M, T, false);
-    G = -G;
     llt.matrixL().solveInPlace(nu);  // L^-1 nu, so B L^-1 nu = M S^-1 nu = K nu
-    dx.noalias() = G * nu;
   }
+  auto G = A_.block(0, 0, n, m);
+  G.setZero();
+  subtractProduct(G, M, T, false, executor);  // -M T^T
+  G = -G;
+  auto dx = dx_.head(n);
+  dx.noalias() = G * nu;  // K nu
   if (!dx.allFinite() || !G.allFinite())
     return Status(StatusCode::kInternal, "update: non-finite gain");
   auto P = P_.topLeftCorner(n, n);
@@ -285,10 +286,10 @@ Status EkfSlam::applyBatch(const std::vector<LandmarkObservation>& obs, const in
     B_.block(0, m, n, m) = G;
     auto D = A_.block(0, m, n, m);
     D = M;
-    subtractProduct(D, G, S, false);
-    subtractProduct(P, A_.topLeftCorner(n, 2 * m), B_.topLeftCorner(n, 2 * m), true);
+    subtractProduct(D, G, S, false, executor);
+    subtractProduct(P, A_.topLeftCorner(n, 2 * m), B_.topLeftCorner(n, 2 * m), true, executor);
   } else {
-    subtractProduct(P, G, G, true);  // P - B B^T
+    subtractProduct(P, G, G, true, executor);  // P - B B^T
   }
   inject(n);
   return Status::ok();
@@ -296,7 +297,8 @@ Status EkfSlam::applyBatch(const std::vector<LandmarkObservation>& obs, const in
 
 void EkfSlam::subtractProduct(Eigen::Ref<Eigen::MatrixXd> C,
                               const Eigen::Ref<const Eigen::MatrixXd>& U,
-                              const Eigen::Ref<const Eigen::MatrixXd>& V, bool lower_only) {
+                              const Eigen::Ref<const Eigen::MatrixXd>& V, bool lower_only,
+                              Executor* executor) {
   const int rows = static_cast<int>(C.rows()), cols = static_cast<int>(C.cols()),
             r = static_cast<int>(U.cols());
   if (!rank_update_) {
@@ -309,8 +311,8 @@ void EkfSlam::subtractProduct(Eigen::Ref<Eigen::MatrixXd> C,
   // Row pieces of (nearly) equal work: [b_k, b_{k+1}) with b_k = rows sqrt(k / p) for the
   // triangle (its first b rows hold b^2 / 2 elements), rows k / p for a full product.
   int pieces = 1;
-  if (executor_ && rows >= 128)
-    pieces = std::max(1, std::min(executor_->concurrency(), params_.max_update_tasks));
+  if (executor && rows >= 128)
+    pieces = std::max(1, std::min(executor->concurrency(), params_.max_update_tasks));
   const auto bound = [&](int k) {
     if (k >= pieces) return rows;
     const double f = static_cast<double>(k) / pieces;
@@ -327,7 +329,7 @@ void EkfSlam::subtractProduct(Eigen::Ref<Eigen::MatrixXd> C,
   if (pieces == 1)
     piece(0);
   else
-    executor_->parallelFor(pieces, piece);
+    executor->parallelFor(pieces, piece);
 }
 
 void EkfSlam::inject(int n) {

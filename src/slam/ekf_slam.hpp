@@ -131,11 +131,14 @@ class EkfSlam {
   // out.topRows(n) = columns [c0, c0 + k) of the full P, from the stored lower triangle.
   void gatherColumns(int c0, int k, Eigen::MatrixXd& out) const;
   Status checkObservations(const std::vector<LandmarkObservation>& obs) const;
-  Status applyBatch(const std::vector<LandmarkObservation>& obs, const int* idx, int count);
+  // One stacked update; its products run as row pieces on `executor` when not null.
+  Status applyBatch(const std::vector<LandmarkObservation>& obs, const int* idx, int count,
+                    Executor* executor);
   void inject(int n);
   // C -= U V^T (only its lower triangle when lower_only), through the matrix kernels.
   void subtractProduct(Eigen::Ref<Eigen::MatrixXd> C, const Eigen::Ref<const Eigen::MatrixXd>& U,
-                       const Eigen::Ref<const Eigen::MatrixXd>& V, bool lower_only);
+                       const Eigen::Ref<const Eigen::MatrixXd>& V, bool lower_only,
+                       Executor* executor);
 
   EkfSlamParams params_;
   Status init_status_;
@@ -156,7 +159,6 @@ class EkfSlam {
   const simd::MatrixKernels* rank_update_ = nullptr;  // null: no hardware FMA, Eigen's product
   std::vector<double> rank_update_ws_;  // max_update_tasks pieces of ws_piece_ doubles
   std::size_t ws_piece_ = 0;
-  Executor* executor_ = nullptr;  // the executor of the update() in progress
 };
 
 }  // namespace svslam
