@@ -45,12 +45,7 @@ float responseScalar(const float* ra, const float* rb, const float* rc, bool har
 
 #if defined(__x86_64__)
 #define SVSLAM_FLOAT_ROW_AVX2 1
-// "avx2" does not enable FMA: c * p[x] is rounded before the add, as in the reference.
-__attribute__((target("avx2"))) void axpyAvx2(float* __restrict__ t, const float* __restrict__ p,
-                                              float c, int n) {
-  for (int x = 0; x < n; ++x) t[x] += c * p[x];
-}
-
+// "avx2" does not enable FMA: each product is rounded before the add, as in the reference.
 // Eight outputs at a time held in a register over all taps: the rows are read once and out is
 // written once (the reference reads and writes out once per tap); same operations per element.
 __attribute__((target("avx2"))) void convolveAvx2(const float* const* rows, const float* c,
@@ -127,10 +122,10 @@ bool floatRowBackendAvailable(Backend b) {
 }
 
 const FloatRowKernels& floatRowKernels([[maybe_unused]] Backend b) {
-  static const FloatRowKernels scalar{Backend::kScalar, "scalar", axpyScalar, convolveScalar,
-                                        productsScalar, responseScalar};
+  static const FloatRowKernels scalar{Backend::kScalar, "scalar", convolveScalar, productsScalar,
+                                        responseScalar};
 #if defined(SVSLAM_FLOAT_ROW_AVX2)
-  static const FloatRowKernels avx2{Backend::kAvx2, "avx2", axpyAvx2, convolveAvx2, productsAvx2,
+  static const FloatRowKernels avx2{Backend::kAvx2, "avx2", convolveAvx2, productsAvx2,
                                       responseAvx2};
   if ((b == Backend::kAuto || b == Backend::kAvx2) && floatRowBackendAvailable(Backend::kAvx2))
     return avx2;

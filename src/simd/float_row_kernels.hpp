@@ -1,6 +1,6 @@
 #pragma once
-// Float row kernels of the corner detector (separable convolution taps and gradient products),
-// one table per instruction set, chosen at run time.
+// Float row kernels of the corner detector (separable convolution rows, gradient products and
+// the corner response), one table per instruction set, chosen at run time.
 //
 // Each output element is computed by the same IEEE single-precision operations in the same order
 // on every backend (a multiply then an add, never fused: the AVX2 variant is compiled without
@@ -12,10 +12,9 @@ namespace svslam::simd {
 struct FloatRowKernels {
   Backend backend;
   const char* name;
-  // t[x] = t[x] + c * p[x] for x in [0, n). The arrays do not overlap (nor do those of products).
-  void (*axpy)(float* t, const float* p, float c, int n);
   // out[x] = sum_{k=0}^{taps-1} c[k] rows[k][x] for x in [0, n), accumulated from 0.0f in the
-  // order k = 0, 1, .. (each product rounded, then added). out does not overlap the rows.
+  // order k = 0, 1, .. (each product rounded, then added). No output array of a kernel overlaps
+  // its inputs.
   void (*convolve)(const float* const* rows, const float* c, int taps, float* out, int n);
   // xx[x] = gx[x]^2, yy[x] = gy[x]^2, xy[x] = gx[x] gy[x] for x in [0, n).
   void (*products)(const float* gx, const float* gy, float* xx, float* yy, float* xy, int n);

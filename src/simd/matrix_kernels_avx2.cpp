@@ -51,7 +51,9 @@ struct Avx2Micro {
       c31 = _mm256_fnmadd_pd(a1, bu, c31);
       c32 = _mm256_fnmadd_pd(a2, bu, c32);
     }
-    const auto add = [](double* p, __m256d v) { _mm256_storeu_pd(p, _mm256_add_pd(_mm256_loadu_pd(p), v)); };
+    const auto add = [](double* p, __m256d v) {
+      _mm256_storeu_pd(p, _mm256_add_pd(_mm256_loadu_pd(p), v));
+    };
     add(c0, c00), add(c0 + 4, c01), add(c0 + 8, c02);
     add(c1, c10), add(c1 + 4, c11), add(c1 + 8, c12);
     add(c2, c20), add(c2 + 4, c21), add(c2 + 8, c22);
