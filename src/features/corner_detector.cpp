@@ -22,44 +22,6 @@ std::vector<float> gaussian(double sigma, bool derivative) {
   return k;
 }
 
-// Taps of the largest kernel: radius ceil(3 sigma) with sigma <= 10 px (CornerParams::validate).
-constexpr int kMaxTaps = 64;
-
-// Separable convolution with replicated borders: horizontal kernel kx, then vertical ky,
-//   tmp(x, y) = sum_k kx[k + rx] in(x - k, y),   out(x, y) = sum_k ky[k + ry] tmp(x, y - k),
-// coordinates clamped to the image, each output summed in tap order (simd::FloatRowKernels::
-// convolve); `row` is scratch space of at least w + 2 rx floats. Rows [y0, y1) of one pass.
-template <class T>
-void horizontalRows(ImageView<const T> in, const std::vector<float>& kx, ImageF32& tmp,
-                    std::vector<float>& row, int y0, int y1) {
-  const int w = in.width;
-  const int rx = static_cast<int>(kx.size() / 2);
-  row.resize(static_cast<std::size_t>(w + 2 * rx));
-  const simd::FloatRowKernels& k = simd::floatRowKernels();
-  const float* taps[kMaxTaps];
-  for (int y = y0; y < y1; ++y) {
-    const T* src = in.row(y);
-    float* pad = row.data();  // pad[i] = in(clamp(i - rx), y)
-    for (int i = 0; i < rx; ++i) pad[i] = static_cast<float>(src[0]);
-    for (int x = 0; x < w; ++x) pad[x + rx] = static_cast<float>(src[x]);
-    for (int i = 0; i < rx; ++i) pad[w + rx + i] = static_cast<float>(src[w - 1]);
-    for (int j = 0; j <= 2 * rx; ++j) taps[j] = pad + 2 * rx - j;  // tap j - rx: pad + rx - (j - rx)
-    k.convolve(taps, kx.data(), 2 * rx + 1, tmp.row(y), w);
-  }
-}
-
-void verticalRows(const ImageF32& tmp, const std::vector<float>& ky, ImageF32& out, int y0,
-                  int y1) {
-  const int h = tmp.height();
-  const int ry = static_cast<int>(ky.size() / 2);
-  const simd::FloatRowKernels& k = simd::floatRowKernels();
-  const float* taps[kMaxTaps];
-  for (int y = y0; y < y1; ++y) {
-    for (int j = 0; j <= 2 * ry; ++j) taps[j] = tmp.row(std::clamp(y - (j - ry), 0, h - 1));
-    k.convolve(taps, ky.data(), 2 * ry + 1, out.row(y), tmp.width());
-  }
-}
-
 // Rows of stripe i of n over h rows.
 inline int stripeBegin(int i, int n, int h) { return static_cast<int>(static_cast<long>(h) * i / n); }
 
@@ -89,22 +51,9 @@ CornerDetector::CornerDetector(const CornerParams& params, int width, int height
   kd_ = gaussian(params_.sigma_d_px, true);
   kg_ = gaussian(params_.sigma_d_px, false);
   ki_ = gaussian(params_.sigma_i_px, false);
-  for (ImageF32* im : {&tmp_, &ix_, &iy_, &ixx_, &iyy_, &ixy_, &resp_}) im->resize(width, height);
+  resp_.resize(width, height);
+  stripes_.emplace_back(width, kd_, kg_, ki_);
   cells_.resize(static_cast<std::size_t>(params_.grid_cols * params_.grid_rows));
-}
-
-template <class T>
-void CornerDetector::convolve(ImageView<const T> in, const std::vector<float>& kx,
-                              const std::vector<float>& ky, ImageF32& out, Executor& executor) {
-  const int n = static_cast<int>(rows_.size());
-  const int h = in.height;
-  executor.parallelFor(n, [&](int i) {
-    horizontalRows(in, kx, tmp_, rows_[static_cast<std::size_t>(i)], stripeBegin(i, n, h),
-                   stripeBegin(i + 1, n, h));
-  });
-  executor.parallelFor(n, [&](int i) {
-    verticalRows(tmp_, ky, out, stripeBegin(i, n, h), stripeBegin(i + 1, n, h));
-  });
 }
 
 Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<Corner>& out) {
@@ -118,37 +67,15 @@ Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<
   if (!init_status_) return init_status_;
   if (image.width != width_ || image.height != height_)
     return Status::invalidArgument("corner detector built for another image size");
-  // Row stripes: a few per worker; one with a serial executor.
-  const int n = executor.concurrency() > 1 ? std::min(4 * executor.concurrency(), height_) : 1;
-  if (static_cast<int>(rows_.size()) != n) rows_.resize(static_cast<std::size_t>(n));
+  // Row stripes: two per worker (each recomputes a halo of ri + rd rows); one when serial.
+  const int n = executor.concurrency() > 1 ? std::min(2 * executor.concurrency(), height_) : 1;
+  while (static_cast<int>(stripes_.size()) < n) stripes_.emplace_back(width_, kd_, kg_, ki_);
   stripe_max_.assign(static_cast<std::size_t>(n), 0.0f);
-  // Gradients (derivative of Gaussian along one axis, Gaussian along the other).
-  convolve<std::uint8_t>(image, kd_, kg_, ix_, executor);
-  convolve<std::uint8_t>(image, kg_, kd_, iy_, executor);
-  executor.parallelFor(n, [&](int i) {
-  for (int y = stripeBegin(i, n, height_); y < stripeBegin(i + 1, n, height_); ++y) {
-    const float* gx = ix_.row(y);
-    const float* gy = iy_.row(y);
-    float* xx = ixx_.row(y);
-    float* yy = iyy_.row(y);
-    float* xy = ixy_.row(y);
-    simd::floatRowKernels().products(gx, gy, xx, yy, xy, width_);
-  }
-  });
-  convolve<float>(ixx_.cview(), ki_, ki_, ixx_, executor);
-  convolve<float>(iyy_.cview(), ki_, ki_, iyy_, executor);
-  convolve<float>(ixy_.cview(), ki_, ki_, ixy_, executor);
   const bool harris = params_.response == CornerResponse::kHarris;
-  const double k = params_.harris_k;
   executor.parallelFor(n, [&](int i) {
-  float max_r = 0;
-  for (int y = stripeBegin(i, n, height_); y < stripeBegin(i + 1, n, height_); ++y) {
-    const float* ra = ixx_.row(y);
-    const float* rb = ixy_.row(y);
-    const float* rc = iyy_.row(y);
-    max_r = simd::floatRowKernels().response(ra, rb, rc, harris, k, resp_.row(y), width_, max_r);
-  }
-  stripe_max_[static_cast<std::size_t>(i)] = max_r;
+    stripe_max_[static_cast<std::size_t>(i)] = stripes_[static_cast<std::size_t>(i)].process(
+        image, harris, params_.harris_k, stripeBegin(i, n, height_), stripeBegin(i + 1, n, height_),
+        resp_);
   });
   float max_r = 0;  // max is exact: the same for any stripes
   for (float m : stripe_max_) max_r = std::max(max_r, m);
@@ -159,35 +86,30 @@ Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<
   const int b = params_.border_px;
   std::vector<std::vector<Corner>>& cells = cells_;
   for (auto& cell : cells) cell.clear();
-  for (int y = b; y < height_ - b; ++y)
-    for (int x = b; x < width_ - b; ++x) {
-      const float r = resp_(x, y);
-      if (r <= thr) continue;
-      bool is_max = true;
-      for (int dy = -1; dy <= 1 && is_max; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          if (dx == 0 && dy == 0) continue;
-          const float q = resp_(x + dx, y + dy);
-          if (q > r ||
-              (q == r && (dy < 0 || (dy == 0 && dx < 0)))) {  // ties: first in raster order
-            is_max = false;
-            break;
-          }
-        }
-      if (!is_max) continue;
+  maxima_x_.resize(static_cast<std::size_t>(width_));
+  const simd::FloatRowKernels& kern = simd::floatRowKernels();
+  for (int y = b; y < height_ - b; ++y) {
+    const float* row = resp_.row(y);
+    const float* up = resp_.row(y - 1);
+    const float* down = resp_.row(y + 1);
+    const int count = kern.localMaxima(up, row, down, thr, b, width_ - b, maxima_x_.data());
+    for (int i = 0; i < count; ++i) {
+      const int x = maxima_x_[static_cast<std::size_t>(i)];
       // Sub-pixel: parabola through the response in x and in y.
       auto offset = [](float m, float c0, float p) {
         const float den = m - 2 * c0 + p;
         return den < 0 ? std::clamp(0.5f * (m - p) / den, -0.5f, 0.5f) : 0.0f;
       };
+      const float r = row[x];
       Corner cn;
-      cn.x_px = static_cast<float>(x) + offset(resp_(x - 1, y), r, resp_(x + 1, y));
-      cn.y_px = static_cast<float>(y) + offset(resp_(x, y - 1), r, resp_(x, y + 1));
+      cn.x_px = static_cast<float>(x) + offset(row[x - 1], r, row[x + 1]);
+      cn.y_px = static_cast<float>(y) + offset(up[x], r, down[x]);
       cn.response = r;
       const int cx = std::min(params_.grid_cols - 1, x * params_.grid_cols / width_);
       const int cy = std::min(params_.grid_rows - 1, y * params_.grid_rows / height_);
       cells[static_cast<std::size_t>(cy * params_.grid_cols + cx)].push_back(cn);
     }
+  }
   for (auto& cell : cells) {
     // Ties keep raster order (the order of insertion), as a stable sort would, without its buffer.
     std::sort(cell.begin(), cell.end(), [](const Corner& a, const Corner& c) {

@@ -14,6 +14,7 @@
 #include "core/executor.hpp"
 #include "core/image.hpp"
 #include "core/status.hpp"
+#include "features/corner_response_rows.hpp"
 
 namespace svslam {
 
@@ -58,12 +59,9 @@ class CornerDetector {
   int width_, height_;
   float max_response_ = 0;
   std::vector<float> kd_, kg_, ki_;  // derivative, smoothing and integration kernels
-  ImageF32 tmp_, ix_, iy_, ixx_, iyy_, ixy_, resp_;
-  // Separable convolution of `in` into `out` through tmp_, rows split over the executor.
-  template <class T>
-  void convolve(ImageView<const T> in, const std::vector<float>& kx, const std::vector<float>& ky,
-                ImageF32& out, Executor& executor);
-  std::vector<std::vector<float>> rows_;  // per stripe: padded row of the horizontal pass
+  ImageF32 resp_;                            // corner response of the last image
+  std::vector<CornerResponseRows> stripes_;  // one per row stripe, rings preallocated
+  std::vector<int> maxima_x_;                // per row: columns of the local maxima
   std::vector<float> stripe_max_;         // per stripe: largest response
   std::vector<std::vector<Corner>> cells_;  // bucketing grid, capacity kept between frames
 };

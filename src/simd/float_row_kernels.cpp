@@ -43,24 +43,45 @@ float responseScalar(const float* ra, const float* rb, const float* rc, bool har
   return max_r;
 }
 
+int localMaximaScalar(const float* up, const float* mid, const float* down, float thr, int x0,
+                      int x1, int* xs) {
+  int count = 0;
+  for (int x = x0; x < x1; ++x) {
+    const float r = mid[x];
+    if (r > thr && r > up[x - 1] && r > up[x] && r > up[x + 1] && r > mid[x - 1] &&
+        r >= mid[x + 1] && r >= down[x - 1] && r >= down[x] && r >= down[x + 1])
+      xs[count++] = x;
+  }
+  return count;
+}
+
 #if defined(__x86_64__)
 #define SVSLAM_FLOAT_ROW_AVX2 1
 // "avx2" does not enable FMA: each product is rounded before the add, as in the reference.
-// Eight outputs at a time held in a register over all taps: the rows are read once and out is
-// written once (the reference reads and writes out once per tap); same operations per element.
+// Outputs held in registers over all taps: the rows are read once and out is written once (the
+// reference reads and writes out once per tap); same operations per element. Each output's adds
+// form a chain of `taps` dependent adds (3-4 cycles each), so B independent vectors of 8 run
+// together to hide that latency: B = 8 (64 outputs) in the body, then 2, then 1, then scalar.
+template <int B>
+__attribute__((target("avx2"), always_inline)) inline void convolveBlockAvx2(
+    const float* const* rows, const float* c, int taps, float* __restrict__ out, int x) {
+  __m256 acc[B];
+  for (int i = 0; i < B; ++i) acc[i] = _mm256_setzero_ps();
+  for (int k = 0; k < taps; ++k) {
+    const __m256 ck = _mm256_set1_ps(c[k]);
+    const float* r = rows[k] + x;
+    for (int i = 0; i < B; ++i)
+      acc[i] = _mm256_add_ps(acc[i], _mm256_mul_ps(ck, _mm256_loadu_ps(r + 8 * i)));
+  }
+  for (int i = 0; i < B; ++i) _mm256_storeu_ps(out + x + 8 * i, acc[i]);
+}
+
 __attribute__((target("avx2"))) void convolveAvx2(const float* const* rows, const float* c,
                                                   int taps, float* __restrict__ out, int n) {
   int x = 0;
-  for (; x + 16 <= n; x += 16) {
-    __m256 a0 = _mm256_setzero_ps(), a1 = _mm256_setzero_ps();
-    for (int k = 0; k < taps; ++k) {
-      const __m256 ck = _mm256_set1_ps(c[k]);
-      a0 = _mm256_add_ps(a0, _mm256_mul_ps(ck, _mm256_loadu_ps(rows[k] + x)));
-      a1 = _mm256_add_ps(a1, _mm256_mul_ps(ck, _mm256_loadu_ps(rows[k] + x + 8)));
-    }
-    _mm256_storeu_ps(out + x, a0);
-    _mm256_storeu_ps(out + x + 8, a1);
-  }
+  for (; x + 64 <= n; x += 64) convolveBlockAvx2<8>(rows, c, taps, out, x);
+  for (; x + 16 <= n; x += 16) convolveBlockAvx2<2>(rows, c, taps, out, x);
+  for (; x + 8 <= n; x += 8) convolveBlockAvx2<1>(rows, c, taps, out, x);
   for (; x < n; ++x) {
     float a = 0.0f;
     for (int k = 0; k < taps; ++k) a += c[k] * rows[k][x];
@@ -109,6 +130,32 @@ __attribute__((target("avx2"))) float responseAvx2(const float* ra, const float*
   for (const float v : m) max_r = std::max(max_r, v);
   return responseScalar(ra + x, rb + x, rc + x, harris, k, rr + x, n - x, max_r);
 }
+
+// Eight candidates per step: nine ordered compares and a bit scan of the mask.
+__attribute__((target("avx2"))) int localMaximaAvx2(const float* up, const float* mid,
+                                                        const float* down, float thr, int x0,
+                                                        int x1, int* xs) {
+  int count = 0;
+  int x = x0;
+  const __m256 vt = _mm256_set1_ps(thr);
+  for (; x + 8 <= x1; x += 8) {
+    const __m256 r = _mm256_loadu_ps(mid + x);
+    __m256 m = _mm256_cmp_ps(r, vt, _CMP_GT_OQ);
+    if (_mm256_testz_ps(m, m)) continue;  // all below the threshold
+    m = _mm256_and_ps(m, _mm256_cmp_ps(r, _mm256_loadu_ps(up + x - 1), _CMP_GT_OQ));
+    m = _mm256_and_ps(m, _mm256_cmp_ps(r, _mm256_loadu_ps(up + x), _CMP_GT_OQ));
+    m = _mm256_and_ps(m, _mm256_cmp_ps(r, _mm256_loadu_ps(up + x + 1), _CMP_GT_OQ));
+    m = _mm256_and_ps(m, _mm256_cmp_ps(r, _mm256_loadu_ps(mid + x - 1), _CMP_GT_OQ));
+    m = _mm256_and_ps(m, _mm256_cmp_ps(r, _mm256_loadu_ps(mid + x + 1), _CMP_GE_OQ));
+    m = _mm256_and_ps(m, _mm256_cmp_ps(r, _mm256_loadu_ps(down + x - 1), _CMP_GE_OQ));
+    m = _mm256_and_ps(m, _mm256_cmp_ps(r, _mm256_loadu_ps(down + x), _CMP_GE_OQ));
+    m = _mm256_and_ps(m, _mm256_cmp_ps(r, _mm256_loadu_ps(down + x + 1), _CMP_GE_OQ));
+    for (unsigned bits = static_cast<unsigned>(_mm256_movemask_ps(m)); bits != 0;
+         bits &= bits - 1)
+      xs[count++] = x + __builtin_ctz(bits);
+  }
+  return count + localMaximaScalar(up, mid, down, thr, x, x1, xs + count);
+}
 #endif
 
 }  // namespace
@@ -123,10 +170,10 @@ bool floatRowBackendAvailable(Backend b) {
 
 const FloatRowKernels& floatRowKernels([[maybe_unused]] Backend b) {
   static const FloatRowKernels scalar{Backend::kScalar, "scalar", convolveScalar, productsScalar,
-                                        responseScalar};
+                                        responseScalar, localMaximaScalar};
 #if defined(SVSLAM_FLOAT_ROW_AVX2)
   static const FloatRowKernels avx2{Backend::kAvx2, "avx2", convolveAvx2, productsAvx2,
-                                      responseAvx2};
+                                      responseAvx2, localMaximaAvx2};
   if ((b == Backend::kAuto || b == Backend::kAvx2) && floatRowBackendAvailable(Backend::kAvx2))
     return avx2;
 #endif

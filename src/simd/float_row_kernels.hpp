@@ -24,6 +24,13 @@ struct FloatRowKernels {
   // Returns max(max_in, out[0..n)) (NaN responses, never expected, do not raise it).
   float (*response)(const float* a, const float* b, const float* c, bool harris, double k,
                     float* out, int n, float max_in);
+  // Non-maximum suppression of one row: writes to xs, in increasing order, every x in [x0, x1)
+  // where r = mid[x] is the strict maximum of its 3x3 neighbourhood, ties going to the first in
+  // raster order:  r > thr,  r > up[x-1], up[x], up[x+1], mid[x-1],  r >= mid[x+1], down[x-1],
+  // down[x], down[x+1]  (ordered comparisons: a NaN is never a maximum). Returns the count.
+  // Precondition: 1 <= x0, x1 < the rows' length (x0 - 1 .. x1 are read); xs holds x1 - x0.
+  int (*localMaxima)(const float* up, const float* mid, const float* down, float thr, int x0,
+                     int x1, int* xs);
 };
 
 bool floatRowBackendAvailable(Backend b);  // kAuto and kScalar: always; kAvx2 on x86 with AVX2

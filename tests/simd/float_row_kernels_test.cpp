@@ -58,6 +58,52 @@ TEST(FloatRowKernels, ReferenceComputesTheDefinition) {
   EXPECT_EQ(r[1], 1.0f);
 }
 
+// Rows of few distinct values, so that ties between neighbours are common.
+std::vector<float> coarseRow(int n, unsigned seed) {
+  std::vector<float> v = randomRow(n, seed);
+  for (float& x : v) x = std::round(x / 40.0f);
+  return v;
+}
+
+// The 3x3 rule written out: r above thr and above every neighbour, ties to the first in raster
+// order (a neighbour equal to r blocks it when it comes before, in the row above or to the left).
+std::vector<int> maximaByDefinition(const std::vector<float>* rows, float thr, int x0, int x1) {
+  std::vector<int> xs;
+  for (int x = x0; x < x1; ++x) {
+    const float r = rows[1][static_cast<std::size_t>(x)];
+    bool keep = r > thr;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (dx == 0 && dy == 0) continue;
+        const float q = rows[1 + dy][static_cast<std::size_t>(x + dx)];
+        const bool before = dy < 0 || (dy == 0 && dx < 0);
+        if (q > r || (before && q == r)) keep = false;
+      }
+    if (keep) xs.push_back(x);
+  }
+  return xs;
+}
+
+TEST(FloatRowKernels, LocalMaximaFollowTheRasterTieRule) {
+  const FloatRowKernels& ref = floatRowKernels(Backend::kScalar);
+  const int n = 301;
+  const std::vector<float> rows[3] = {coarseRow(n, 7), coarseRow(n, 8), coarseRow(n, 9)};
+  std::vector<int> xs(static_cast<std::size_t>(n));
+  for (float thr : {-10.0f, 0.0f, 1.0f}) {
+    const int c = ref.localMaxima(rows[0].data(), rows[1].data(), rows[2].data(), thr, 1, n - 1,
+                                  xs.data());
+    const std::vector<int> want = maximaByDefinition(rows, thr, 1, n - 1);
+    ASSERT_GT(want.size(), 5u);
+    EXPECT_EQ(std::vector<int>(xs.begin(), xs.begin() + c), want) << "thr " << thr;
+  }
+  // A plateau of equal values keeps exactly its first pixel in raster order.
+  const std::vector<float> flat(12, 5.0f);
+  const std::vector<float> plateau[3] = {flat, flat, flat};
+  EXPECT_EQ(ref.localMaxima(plateau[0].data(), plateau[1].data(), plateau[2].data(), 0.0f, 1, 11,
+                            xs.data()),
+            0);  // every pixel has an equal neighbour before it
+}
+
 TEST(FloatRowKernels, EveryAvailableBackendIsBitExactWithTheReference) {
   int tested = 0;
   for (Backend b : {Backend::kAvx2, Backend::kAvx512, Backend::kNeon}) {
@@ -102,6 +148,21 @@ TEST(FloatRowKernels, EveryAvailableBackendIsBitExactWithTheReference) {
           ref.convolve(rows.data(), c.data(), taps, o1.data(), n);
           k.convolve(rows.data(), c.data(), taps, o2.data(), n);
           ASSERT_TRUE(sameBits(o1, o2)) << k.name << " convolve, n = " << n << ", taps " << taps;
+        }
+        if (n >= 3) {
+          std::vector<float> m[3];
+          for (int i = 0; i < 3; ++i) m[i] = coarseRow(n + off, static_cast<unsigned>(n * 3 + i));
+          std::vector<int> x1(static_cast<std::size_t>(n)), x2(x1);
+          for (int lo : {1, 2})
+            for (float thr : {-1.0f, 0.0f}) {
+              const int c1 = ref.localMaxima(m[0].data() + off, m[1].data() + off,
+                                             m[2].data() + off, thr, lo, n - 1, x1.data());
+              const int c2 = k.localMaxima(m[0].data() + off, m[1].data() + off,
+                                           m[2].data() + off, thr, lo, n - 1, x2.data());
+              ASSERT_EQ(c1, c2) << k.name << " localMaxima, n = " << n;
+              ASSERT_TRUE(std::equal(x1.begin(), x1.begin() + c1, x2.begin()))
+                  << k.name << " localMaxima, n = " << n;
+            }
         }
       }
   }
