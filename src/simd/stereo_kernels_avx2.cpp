@@ -1,5 +1,7 @@
 // AVX2 backend of the stereo row kernels: 32 pixels per step for census and SAD, 16 uint16
-// lanes per step elsewhere, scalar tails. Bit-exact with stereo_kernels_scalar.cpp.
+// lanes per step elsewhere, scalar tails. Bit-exact with stereo_kernels_scalar.cpp. The
+// winner-take-all kernels are in stereo_kernels_avx2_wta.cpp, finalizeRow in
+// stereo_kernels_avx2_finalize.cpp.
 #include <immintrin.h>
 
 #include <array>
@@ -8,115 +10,14 @@
 #include <utility>
 
 #include "simd/stereo_kernels.hpp"
+#include "simd/stereo_kernels_avx2_detail.hpp"
 
 namespace svslam::simd {
 
-// 8 pixels per step in 32-bit lanes; every test of finalizeRange becomes a lane mask, the counts
-// are per-lane accumulators (subtracting an all-ones mask adds 1), the look-ups are gathers.
-void finalizeRowAvx2(const WtaRowState& s, const std::uint8_t* low_texture, int width,
-                     const FinalizeParams& p, float* disp, float* sigma, float* curv,
-                     FinalizeCounts& counts) {
-  const __m256i zero = _mm256_setzero_si256();
-  const __m256i ones = _mm256_set1_epi32(-1);
-  const __m256i u16max = _mm256_set1_epi32(0xFFFF);
-  const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  const __m256i vd0 = _mm256_set1_epi32(p.d0);
-  const __m256i last_idx = _mm256_set1_epi32(p.num_disp - 1);
-  const __m256i wmax = _mm256_set1_epi32(width - 1);
-  const __m256i lr_max = _mm256_set1_epi32(p.lr_max_diff);
-  const __m256i max_denom = _mm256_set1_epi32(p.max_denom);
-  const __m256i uniq_factor = _mm256_set1_epi32(100 + p.uniqueness_pct);
-  const __m256i hundred = _mm256_set1_epi32(100);
-  const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
-  const __m256 inv_area = _mm256_set1_ps(p.inv_area);
-  const __m256i use_uniq = p.uniqueness_pct > 0 ? ones : zero;
-  const __m256i use_lr = p.lr_check ? ones : zero;
-  const __m256i use_sub = p.subpixel ? ones : zero;
-  __m256i n_nc = zero, n_lt = zero, n_nu = zero, n_lr = zero, n_ok = zero;
-  const auto load8 = [](const void* q) {
-    return _mm_loadu_si128(static_cast<const __m128i*>(q));
-  };
-  int x = 0;
-  for (; x + 8 <= width; x += 8) {
-    const __m256i idx = _mm256_cvtepi16_epi32(load8(s.bidx + x));
-    const __m256i best = _mm256_cvtepu16_epi32(load8(s.best + x));
-    const __m256i second = _mm256_cvtepu16_epi32(load8(s.second + x));
-    const __m256i cm = _mm256_cvtepu16_epi32(load8(s.cm + x));
-    const __m256i cp = _mm256_cvtepu16_epi32(load8(s.cp + x));
-    const __m256i no_cand = _mm256_cmpgt_epi32(zero, idx);
-    __m256i low_tex = zero;
-    if (low_texture != nullptr) {
-      const __m256i t = _mm256_cvtepu8_epi32(_mm_loadl_epi64(
-          reinterpret_cast<const __m128i*>(low_texture + x)));
-      low_tex = _mm256_andnot_si256(_mm256_cmpeq_epi32(t, zero), ones);
-    }
-    // 100 second and (100 + u) best are below 2^31, so signed compares order them.
-    const __m256i no_margin =
-        _mm256_andnot_si256(_mm256_cmpgt_epi32(_mm256_mullo_epi32(second, hundred),
-                                               _mm256_mullo_epi32(best, uniq_factor)),
-                            ones);
-    const __m256i not_unique =
-        _mm256_and_si256(use_uniq, _mm256_or_si256(_mm256_cmpeq_epi32(second, u16max), no_margin));
-    const __m256i vx = _mm256_add_epi32(_mm256_set1_epi32(x), lanes);
-    const __m256i xr = _mm256_min_epi32(
-        _mm256_max_epi32(_mm256_sub_epi32(vx, _mm256_add_epi32(vd0, idx)), zero), wmax);
-    // 32-bit gather at idx_r + xr (2-byte scale): the low half is idx_r[xr].
-    const __m256i g = _mm256_i32gather_epi32(reinterpret_cast<const int*>(s.idx_r), xr, 2);
-    const __m256i idr = _mm256_srai_epi32(_mm256_slli_epi32(g, 16), 16);
-    const __m256i lr_bad = _mm256_and_si256(
-        use_lr, _mm256_or_si256(_mm256_cmpgt_epi32(zero, idr),
-                                _mm256_cmpgt_epi32(_mm256_abs_epi32(_mm256_sub_epi32(idr, idx)),
-                                                   lr_max)));
-    // First failing test wins.
-    const __m256i f1 = no_cand;
-    const __m256i f2 = _mm256_andnot_si256(f1, low_tex);
-    const __m256i any12 = _mm256_or_si256(f1, low_tex);
-    const __m256i f3 = _mm256_andnot_si256(any12, not_unique);
-    const __m256i any123 = _mm256_or_si256(any12, not_unique);
-    const __m256i f4 = _mm256_andnot_si256(any123, lr_bad);
-    const __m256i invalid = _mm256_or_si256(any123, lr_bad);
-    n_nc = _mm256_sub_epi32(n_nc, f1);
-    n_lt = _mm256_sub_epi32(n_lt, f2);
-    n_nu = _mm256_sub_epi32(n_nu, f3);
-    n_lr = _mm256_sub_epi32(n_lr, f4);
-    n_ok = _mm256_sub_epi32(n_ok, _mm256_xor_si256(invalid, ones));
-
-    const __m256i denom = _mm256_sub_epi32(_mm256_add_epi32(cm, cp), _mm256_add_epi32(best, best));
-    const __m256i parabola = _mm256_and_si256(
-        _mm256_and_si256(_mm256_cmpgt_epi32(idx, zero), _mm256_cmpgt_epi32(last_idx, idx)),
-        _mm256_andnot_si256(_mm256_cmpeq_epi32(cp, u16max), _mm256_cmpgt_epi32(denom, zero)));
-    const __m256i safe_denom = _mm256_blendv_epi8(_mm256_set1_epi32(1), denom, parabola);
-    const __m256 q = _mm256_div_ps(_mm256_cvtepi32_ps(_mm256_sub_epi32(cm, cp)),
-                                   _mm256_cvtepi32_ps(_mm256_add_epi32(safe_denom, safe_denom)));
-    const __m256 delta =
-        _mm256_and_ps(q, _mm256_castsi256_ps(_mm256_and_si256(parabola, use_sub)));
-    const __m256 d = _mm256_add_ps(_mm256_cvtepi32_ps(_mm256_add_epi32(vd0, idx)), delta);
-    const __m256i tab_i = _mm256_and_si256(_mm256_min_epi32(denom, max_denom), parabola);
-    const __m256 sg = _mm256_i32gather_ps(p.sigma_by_denom, tab_i, 4);
-    const __m256 cv = _mm256_and_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(denom), inv_area),
-                                    _mm256_castsi256_ps(parabola));
-    const __m256 inval = _mm256_castsi256_ps(invalid);
-    _mm256_storeu_ps(disp + x, _mm256_blendv_ps(d, inf, inval));
-    _mm256_storeu_ps(sigma + x, _mm256_blendv_ps(sg, inf, inval));
-    _mm256_storeu_ps(curv + x, _mm256_blendv_ps(cv, inf, inval));
-  }
-  const auto sum8 = [](__m256i v) {
-    alignas(32) int t[8];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(t), v);
-    return t[0] + t[1] + t[2] + t[3] + t[4] + t[5] + t[6] + t[7];
-  };
-  counts.no_candidate += sum8(n_nc);
-  counts.low_texture += sum8(n_lt);
-  counts.not_unique += sum8(n_nu);
-  counts.lr_inconsistent += sum8(n_lr);
-  counts.valid += sum8(n_ok);
-  if (x < width) finalizeRange(s, low_texture, x, width, p, disp, sigma, curv, counts);
-}
-
 namespace {
 
-inline __m256i loadu(const void* p) { return _mm256_loadu_si256(static_cast<const __m256i*>(p)); }
-inline void storeu(void* p, __m256i v) { _mm256_storeu_si256(static_cast<__m256i*>(p), v); }
+using avx2_detail::loadu;
+using avx2_detail::storeu;
 
 // Byte plane j holds census offsets 8j..8j+7 of 32 pixels, MSB first; it is byte 7 - j of each
 // pixel's word. Transposes the planes into 32 words: unpack 8 -> 16 -> 32 bits within lanes
@@ -443,154 +344,12 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
   }
 }
 
-// The left state of 16 columns stays in registers across the planes; the branches of the
-// reference become blends on unsigned minima (no bias needed):
-//   bn = min(best, c); keep = (bn == best), i.e. not c < best
-//   adj = (bidx == i - 1)                 (tested on the old bidx, as the reference does)
-//   second = keep ? min(second, adj ? 0xFFFF : c) : pm2
-//   bidx = keep ? bidx : i
-// cm and cp are left to wtaNeighbours (fewer live registers: no spills in the plane loop).
-// Left state of 16 columns at x; plane p is the row agg + p * stride (agg - stride: plane i0 - 1).
-inline void wtaLeftBlock(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0,
-                         std::uint16_t* best_p, std::int16_t* bidx_p, std::uint16_t* second_p,
-                         std::uint16_t* pm1_p, std::uint16_t* pm2_p) {
-  const __m256i one = _mm256_set1_epi16(1);
-  __m256i best = loadu(best_p);
-  __m256i second = loadu(second_p);
-  __m256i pm1 = loadu(pm1_p);
-  __m256i pm2 = loadu(pm2_p);
-  // bidx1 = bidx + 1 and vi = i, so "i == bidx + 1" is one compare; i < 1024 (numDisp <= 1024)
-  // fits int16 lanes.
-  __m256i bidx1 = _mm256_add_epi16(loadu(bidx_p), one);
-  __m256i vi = _mm256_set1_epi16(static_cast<short>(i0));
-  // One plane: c is plane i, prev plane i - 1.
-  const auto step = [&](__m256i c) {
-    const __m256i vn = _mm256_add_epi16(vi, one);
-    const __m256i bn = _mm256_min_epu16(best, c);
-    const __m256i keep = _mm256_cmpeq_epi16(bn, best);
-    const __m256i adj = _mm256_cmpeq_epi16(bidx1, vi);
-    second = _mm256_blendv_epi8(pm2, _mm256_min_epu16(second, _mm256_or_si256(c, adj)), keep);
-    bidx1 = _mm256_blendv_epi8(vn, bidx1, keep);
-    best = bn;
-    pm2 = pm1;
-    pm1 = _mm256_min_epu16(pm1, c);
-    vi = vn;
-  };
-  // Two planes per iteration, so the rotation pm2 <- pm1 needs no register copies.
-  const std::uint16_t* a = agg;
-  int p = 0;
-  for (; p + 2 <= n_planes; p += 2, a += 2 * stride) {
-    step(loadu(a));
-    step(loadu(a + stride));
-  }
-  if (p < n_planes) step(loadu(a));
-  const __m256i bidx = _mm256_sub_epi16(bidx1, one);
-  storeu(best_p, best);
-  storeu(second_p, second);
-  storeu(pm1_p, pm1);
-  storeu(pm2_p, pm2);
-  storeu(bidx_p, bidx);
-}
-
-// 8 pixels per step: rows bidx -/+ 1 clamped into [0, num_disp), gathered (32-bit, low half),
-// 0xFFFF where the neighbour does not exist.
-void wtaNeighbours(const std::uint16_t* agg, std::ptrdiff_t stride, int num_disp, int width,
-                   const WtaRowState& s) {
-  const __m256i zero = _mm256_setzero_si256();
-  const __m256i one = _mm256_set1_epi32(1);
-  const __m256i low = _mm256_set1_epi32(0xFFFF);
-  const __m256i last = _mm256_set1_epi32(num_disp - 1);
-  const __m256i vstride = _mm256_set1_epi32(static_cast<int>(stride));
-  const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  const int* base = reinterpret_cast<const int*>(agg);
-  int x = 0;
-  for (; x + 8 <= width; x += 8) {
-    const __m256i b =
-        _mm256_cvtepi16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s.bidx + x)));
-    const __m256i vx = _mm256_add_epi32(_mm256_set1_epi32(x), lanes);
-    const __m256i rm = _mm256_max_epi32(_mm256_sub_epi32(b, one), zero);
-    const __m256i rp = _mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(b, one), zero), last);
-    const __m256i gm = _mm256_and_si256(
-        _mm256_i32gather_epi32(base, _mm256_add_epi32(_mm256_mullo_epi32(rm, vstride), vx), 2),
-        low);
-    const __m256i gp = _mm256_and_si256(
-        _mm256_i32gather_epi32(base, _mm256_add_epi32(_mm256_mullo_epi32(rp, vstride), vx), 2),
-        low);
-    const __m256i has_m = _mm256_cmpgt_epi32(b, zero);  // b >= 1
-    const __m256i has_p =
-        _mm256_andnot_si256(_mm256_cmpgt_epi32(zero, b), _mm256_cmpgt_epi32(last, b));
-    const __m256i cm = _mm256_blendv_epi8(low, gm, has_m);
-    const __m256i cp = _mm256_blendv_epi8(low, gp, has_p);
-    // packus: cm0-3 cp0-3 | cm4-7 cp4-7 (16-bit); 64-bit permute 0, 2, 1, 3 joins each half.
-    const __m256i q = _mm256_permute4x64_epi64(_mm256_packus_epi32(cm, cp), 0xD8);
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(s.cm + x), _mm256_castsi256_si128(q));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(s.cp + x), _mm256_extracti128_si256(q, 1));
-  }
-  if (x < width) wtaNeighboursRange(agg, stride, num_disp, x, width, s);
-}
-
-void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int width,
-                   int d0, const WtaRowState& s) {
-  int x = 0;
-  if (n_planes > 0) {
-    for (; x + 16 <= width; x += 16)
-      wtaLeftBlock(agg + x, stride, n_planes, i0, s.best + x, s.bidx + x, s.second + x,
-                   s.pm1 + x, s.pm2 + x);
-  }
-  if (x < width) wtaLeftTail(agg, stride, n_planes, i0, x, width, s);
-
-  // Right image: plane i's candidate for right pixel xr is agg_i[xr + d0 + i]; it wins when
-  // strictly below best_r, i.e. when min(best_r, c) differs from best_r. Right pixels that
-  // every plane of the block reaches keep best_r / idx_r in registers across the planes; the
-  // rest (near the right end, fewer planes) go plane by plane.
-  if (n_planes <= 0) return;
-  const int n_common = width - (d0 + i0 + n_planes - 1);  // right pixels all planes reach
-  const __m256i one = _mm256_set1_epi16(1);
-  int xr_common = 0;
-  for (; xr_common + 16 <= n_common; xr_common += 16) {
-    __m256i br = loadu(s.best_r + xr_common);
-    __m256i ir = loadu(s.idx_r + xr_common);
-    __m256i vi = _mm256_set1_epi16(static_cast<short>(i0));
-    const std::uint16_t* a = agg + (d0 + i0) + xr_common;
-    const auto step = [&](const std::uint16_t* q) {
-      const __m256i nb = _mm256_min_epu16(br, loadu(q));
-      ir = _mm256_blendv_epi8(vi, ir, _mm256_cmpeq_epi16(nb, br));
-      br = nb;
-      vi = _mm256_add_epi16(vi, one);
-    };
-    int p = 0;
-    for (; p + 2 <= n_planes; p += 2, a += 2 * (stride + 1)) {  // two planes: no copies
-      step(a);
-      step(a + stride + 1);
-    }
-    if (p < n_planes) step(a);
-    storeu(s.best_r + xr_common, br);
-    storeu(s.idx_r + xr_common, ir);
-  }
-  for (int p = 0; p < n_planes; ++p) {
-    const int i = i0 + p;
-    const int n_right = width - (d0 + i);
-    if (n_right <= xr_common) continue;
-    const std::uint16_t* a = agg + p * stride + (d0 + i);
-    const __m256i vi = _mm256_set1_epi16(static_cast<short>(i));
-    int xr = xr_common;
-    for (; xr + 16 <= n_right; xr += 16) {
-      const __m256i br = loadu(s.best_r + xr);
-      const __m256i nb = _mm256_min_epu16(br, loadu(a + xr));
-      const __m256i keep = _mm256_cmpeq_epi16(nb, br);
-      storeu(s.best_r + xr, nb);
-      storeu(s.idx_r + xr, _mm256_blendv_epi8(vi, loadu(s.idx_r + xr), keep));
-    }
-    wtaRightTail(a, xr, n_right, i, s);
-  }
-}
-
 }  // namespace
 
 const StereoKernels& avx2Kernels() {
   static const StereoKernels k{Backend::kAvx2, "avx2",    censusRow, censusCostRow,
-                               sadCostRow,     addSubRow, boxRow,    wtaUpdateRows,
-                               wtaNeighbours,  finalizeRowAvx2, censusPlanesRow,
+                               sadCostRow,     addSubRow, boxRow,    avx2_detail::wtaUpdateRows,
+                               avx2_detail::wtaNeighbours,  finalizeRowAvx2, censusPlanesRow,
                                censusPlanesCostRows};
   return k;
 }
