@@ -1,12 +1,16 @@
-// Float row kernels: the portable reference (auto-vectorised for the build's baseline) and, on
-// x86-64, the same loops compiled for AVX2 (target attribute, no FMA) and chosen at run time.
+// Float row kernels: the portable reference (auto-vectorised for the build's baseline); on
+// x86-64 the same operations in AVX2 (target attribute, no FMA), chosen at run time; on AArch64
+// in NEON.
 #include "simd/float_row_kernels.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #if defined(__x86_64__)
 #include <immintrin.h>
+#elif defined(__aarch64__)
+#include <arm_neon.h>
 #endif
 
 namespace svslam::simd {
@@ -158,12 +162,102 @@ __attribute__((target("avx2"))) int localMaximaAvx2(const float* up, const float
 }
 #endif
 
+#if defined(__aarch64__)
+#define SVSLAM_FLOAT_ROW_NEON 1
+// AArch64 NEON (always present there): separate vmulq/vaddq, never fused (the file is built with
+// -ffp-contract=off), so each element sees the reference's operations. Not on 32-bit ARM, whose
+// NEON flushes subnormals and has no float64 lanes.
+template <int B>
+inline void convolveBlockNeon(const float* const* rows, const float* c, int taps,
+                              float* __restrict__ out, int x) {
+  float32x4_t acc[B];
+  for (int i = 0; i < B; ++i) acc[i] = vdupq_n_f32(0.0f);
+  for (int k = 0; k < taps; ++k) {
+    const float32x4_t ck = vdupq_n_f32(c[k]);
+    const float* r = rows[k] + x;
+    for (int i = 0; i < B; ++i) acc[i] = vaddq_f32(acc[i], vmulq_f32(ck, vld1q_f32(r + 4 * i)));
+  }
+  for (int i = 0; i < B; ++i) vst1q_f32(out + x + 4 * i, acc[i]);
+}
+
+void convolveNeon(const float* const* rows, const float* c, int taps, float* __restrict__ out,
+                  int n) {
+  int x = 0;
+  for (; x + 32 <= n; x += 32) convolveBlockNeon<8>(rows, c, taps, out, x);
+  for (; x + 4 <= n; x += 4) convolveBlockNeon<1>(rows, c, taps, out, x);
+  for (; x < n; ++x) {
+    float a = 0.0f;
+    for (int k = 0; k < taps; ++k) a += c[k] * rows[k][x];
+    out[x] = a;
+  }
+}
+
+// Four pixels per step in two float64x2 halves; running maximum as std::max: v > m ? v : m.
+float responseNeon(const float* ra, const float* rb, const float* rc, bool harris, double k,
+                   float* rr, int n, float max_r) {
+  int x = 0;
+  float32x4_t vmax = vdupq_n_f32(max_r);
+  const float64x2_t vk = vdupq_n_f64(k), half = vdupq_n_f64(0.5), quarter = vdupq_n_f64(0.25);
+  auto r2 = [&](float64x2_t a, float64x2_t b, float64x2_t c) {
+    if (harris) {
+      const float64x2_t s = vaddq_f64(a, c);
+      return vsubq_f64(vsubq_f64(vmulq_f64(a, c), vmulq_f64(b, b)), vmulq_f64(vmulq_f64(vk, s), s));
+    }
+    const float64x2_t d = vsubq_f64(a, c);
+    const float64x2_t q = vaddq_f64(vmulq_f64(vmulq_f64(quarter, d), d), vmulq_f64(b, b));
+    return vsubq_f64(vmulq_f64(half, vaddq_f64(a, c)), vsqrtq_f64(q));
+  };
+  for (; x + 4 <= n; x += 4) {
+    const float32x4_t a = vld1q_f32(ra + x), b = vld1q_f32(rb + x), c = vld1q_f32(rc + x);
+    const float64x2_t lo = r2(vcvt_f64_f32(vget_low_f32(a)), vcvt_f64_f32(vget_low_f32(b)),
+                              vcvt_f64_f32(vget_low_f32(c)));
+    const float64x2_t hi = r2(vcvt_high_f64_f32(a), vcvt_high_f64_f32(b), vcvt_high_f64_f32(c));
+    const float32x4_t rf = vcvt_high_f32_f64(vcvt_f32_f64(lo), hi);
+    vst1q_f32(rr + x, rf);
+    vmax = vbslq_f32(vcgtq_f32(rf, vmax), rf, vmax);
+  }
+  float m[4];
+  vst1q_f32(m, vmax);
+  for (const float v : m) max_r = std::max(max_r, v);
+  return responseScalar(ra + x, rb + x, rc + x, harris, k, rr + x, n - x, max_r);
+}
+
+int localMaximaNeon(const float* up, const float* mid, const float* down, float thr, int x0,
+                    int x1, int* xs) {
+  int count = 0;
+  int x = x0;
+  const float32x4_t vt = vdupq_n_f32(thr);
+  for (; x + 4 <= x1; x += 4) {
+    const float32x4_t r = vld1q_f32(mid + x);
+    uint32x4_t m = vcgtq_f32(r, vt);
+    if (vmaxvq_u32(m) == 0) continue;  // all below the threshold
+    m = vandq_u32(m, vcgtq_f32(r, vld1q_f32(up + x - 1)));
+    m = vandq_u32(m, vcgtq_f32(r, vld1q_f32(up + x)));
+    m = vandq_u32(m, vcgtq_f32(r, vld1q_f32(up + x + 1)));
+    m = vandq_u32(m, vcgtq_f32(r, vld1q_f32(mid + x - 1)));
+    m = vandq_u32(m, vcgeq_f32(r, vld1q_f32(mid + x + 1)));
+    m = vandq_u32(m, vcgeq_f32(r, vld1q_f32(down + x - 1)));
+    m = vandq_u32(m, vcgeq_f32(r, vld1q_f32(down + x)));
+    m = vandq_u32(m, vcgeq_f32(r, vld1q_f32(down + x + 1)));
+    if (vmaxvq_u32(m) == 0) continue;
+    std::uint32_t lanes[4];
+    vst1q_u32(lanes, m);
+    for (int i = 0; i < 4; ++i)
+      if (lanes[i] != 0) xs[count++] = x + i;
+  }
+  return count + localMaximaScalar(up, mid, down, thr, x, x1, xs + count);
+}
+#endif
+
 }  // namespace
 
 bool floatRowBackendAvailable(Backend b) {
   if (b == Backend::kAuto || b == Backend::kScalar) return true;
 #if defined(SVSLAM_FLOAT_ROW_AVX2)
   if (b == Backend::kAvx2) return __builtin_cpu_supports("avx2");
+#endif
+#if defined(SVSLAM_FLOAT_ROW_NEON)
+  if (b == Backend::kNeon) return true;
 #endif
   return false;
 }
@@ -176,6 +270,12 @@ const FloatRowKernels& floatRowKernels([[maybe_unused]] Backend b) {
                                       responseAvx2, localMaximaAvx2};
   if ((b == Backend::kAuto || b == Backend::kAvx2) && floatRowBackendAvailable(Backend::kAvx2))
     return avx2;
+#endif
+#if defined(SVSLAM_FLOAT_ROW_NEON)
+  // products: the reference loop, which the compiler vectorises for NEON already.
+  static const FloatRowKernels neon{Backend::kNeon, "neon", convolveNeon, productsScalar,
+                                      responseNeon, localMaximaNeon};
+  if (b == Backend::kAuto || b == Backend::kNeon) return neon;
 #endif
   return scalar;
 }

@@ -1,10 +1,11 @@
 #pragma once
-// Float row kernels of the corner detector (separable convolution rows, gradient products and
-// the corner response), one table per instruction set, chosen at run time.
+// Float row kernels of the corner detector (separable convolution rows, gradient products, the
+// corner response and non-maximum suppression), one table per instruction set: the portable
+// reference, AVX2 (x86-64, chosen at run time) and NEON (AArch64).
 //
 // Each output element is computed by the same IEEE single-precision operations in the same order
 // on every backend (a multiply then an add, never fused: the AVX2 variant is compiled without
-// FMA), so the backends give identical bits; tests hold them to it.
+// FMA, the NEON one with -ffp-contract=off), so the backends give identical bits; tests hold them to it.
 #include "simd/stereo_kernels.hpp"  // Backend
 
 namespace svslam::simd {
