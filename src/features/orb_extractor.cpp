@@ -10,8 +10,6 @@
 namespace svslam {
 namespace {
 
-constexpr std::uint8_t kUnknownScore = 255;  // FAST scores are 0..254
-
 // SplitMix64 (Steele, Lea & Flood 2014): a tiny generator with a fixed, platform-independent
 // sequence, so the BRIEF pattern is the same everywhere for a given seed.
 class SplitMix64 {
@@ -63,39 +61,6 @@ std::vector<float> gaussianKernel(double sigma) {
     k[static_cast<std::size_t>(i + r)] =
         static_cast<float>(std::exp(-0.5 * i * i / (sigma * sigma)) / sum);
   return k;
-}
-
-// Least-squares quadratic f(u, v) = a + b u + c v + d u^2 + e u v + g v^2 over the 3x3 grid
-// u, v in {-1, 0, 1}, samples s[(v + 1) * 3 + u + 1]. The basis 1, u, v, uv, u^2 - 2/3,
-// v^2 - 2/3 is orthogonal on the grid, so each coefficient is a normalised inner product. Where
-// the Hessian [2d e; e 2g] is negative definite the maximum is at -H^-1 (b, c), clamped to +-1;
-// elsewhere the centre sample is returned with a zero offset.
-struct QuadMax {
-  double du = 0, dv = 0, value = 0;
-};
-
-QuadMax fitQuadratic3x3(const float s[9]) {
-  double sum = 0, su = 0, sv = 0, suv = 0, suu = 0, svv = 0;
-  for (int j = -1; j <= 1; ++j)
-    for (int i = -1; i <= 1; ++i) {
-      const double f = s[(j + 1) * 3 + i + 1];
-      sum += f;
-      su += i * f;
-      sv += j * f;
-      suv += i * j * f;
-      suu += (i * i - 2.0 / 3.0) * f;
-      svv += (j * j - 2.0 / 3.0) * f;
-    }
-  const double b = su / 6, c = sv / 6, e = suv / 4, d = suu / 2, g = svv / 2;
-  const double a = sum / 9 - 2.0 / 3.0 * (d + g);
-  QuadMax q;
-  q.value = s[4];
-  const double det = 4 * d * g - e * e;
-  if (!(d < 0 && det > 0)) return q;
-  q.du = std::clamp((e * c - 2 * g * b) / det, -1.0, 1.0);
-  q.dv = std::clamp((e * b - 2 * d * c) / det, -1.0, 1.0);
-  q.value = a + b * q.du + c * q.dv + d * q.du * q.du + e * q.du * q.dv + g * q.dv * q.dv;
-  return q;
 }
 
 }  // namespace
@@ -258,96 +223,6 @@ void OrbExtractor::smoothLayer(int k) {
     std::uint8_t* out = l.smoothed.row(y);
     for (int x = 0; x < w; ++x) out[x] = static_cast<std::uint8_t>(std::min(255.0f, acc[x] + 0.5f));
   }
-}
-
-int OrbExtractor::lazyScore(int k, int x, int y) {
-  if (k < 0) {
-    const ImageU8& img = layers_[0].image;
-    if (x < 1 || y < 1 || x >= img.width() - 1 || y >= img.height() - 1) return 0;
-    std::uint8_t& s = score58_(x, y);
-    if (s == kUnknownScore) s = static_cast<std::uint8_t>(fastScore8(img.row(y) + x, circle8_));
-    return s;
-  }
-  Layer& l = layers_[static_cast<std::size_t>(k)];
-  if (x < 3 || y < 3 || x >= l.image.width() - 3 || y >= l.image.height() - 3) return 0;
-  std::uint8_t& s = l.score(x, y);
-  if (s == kUnknownScore) s = static_cast<std::uint8_t>(fastScore16(l.image.row(y) + x, l.circle));
-  return s;
-}
-
-// Bilinear interpolation of layer j's scores at (x, y) in layer-j px (clamped to the layer).
-float OrbExtractor::sampleScore(int j, double x, double y) {
-  const Layer& l = layers_[static_cast<std::size_t>(j)];
-  const int w = l.image.width(), h = l.image.height();
-  x = std::clamp(x, 0.0, w - 1.0);
-  y = std::clamp(y, 0.0, h - 1.0);
-  const int x0 = std::min(static_cast<int>(x), w - 2), y0 = std::min(static_cast<int>(y), h - 2);
-  const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
-  const float top = (1 - fx) * lazyScore(j, x0, y0) + fx * lazyScore(j, x0 + 1, y0);
-  const float bottom = (1 - fx) * lazyScore(j, x0, y0 + 1) + fx * lazyScore(j, x0 + 1, y0 + 1);
-  return (1 - fy) * top + fy * bottom;
-}
-
-// Scores of layer j (k - 1, k, k + 1; -1 = FAST 5-8 on c_0) at the 3x3 grid of layer-k pixels
-// around the candidate, mapped through x_j = (x_k + 0.5) t_k / t_j - 0.5.
-void OrbExtractor::sampleGrid(const Candidate& c, int j, float v[9]) {
-  const double ratio = layerScale(c.layer) / layerScale(j);
-  for (int dv = -1; dv <= 1; ++dv)
-    for (int du = -1; du <= 1; ++du) {
-      float& out = v[(dv + 1) * 3 + du + 1];
-      if (j == c.layer || j < 0)
-        out = static_cast<float>(lazyScore(j, c.x + du, c.y + dv));
-      else
-        out = sampleScore(j, (c.x + du + 0.5) * ratio - 0.5, (c.y + dv + 0.5) * ratio - 0.5);
-    }
-}
-
-bool OrbExtractor::suppressAndRefine(Candidate& c) {
-  const int k = c.layer, s = static_cast<int>(c.score);
-  float in[9], above[9], below[9];
-  sampleGrid(c, k, in);
-  for (int i = 0; i < 9; ++i) {
-    if (i == 4) continue;
-    const float q = in[i];
-    if (q > s || (q == s && i < 4)) return false;  // ties: first in raster order wins
-  }
-  const bool has_above = k + 1 < numLayers();
-  if (has_above) {
-    sampleGrid(c, k + 1, above);
-    for (float q : above)
-      if (q > s) return false;
-  }
-  sampleGrid(c, k - 1, below);  // k = 0: the virtual layer d_{-1}, not a suppressor
-  if (k > 0)
-    for (float q : below)
-      if (q >= s) return false;
-
-  const double tk = layerScale(k);
-  auto level0 = [&](int p, double offset) { return (p + offset + 0.5) * tk - 0.5; };
-  const QuadMax qk = fitQuadratic3x3(in);
-  double x0 = level0(c.x, qk.du), y0 = level0(c.y, qk.dv), score = qk.value, u = 0;
-  if (has_above) {
-    // Parabola f(h) = s_k + B h + A h^2 in h = log2 t - log2 t_k through the three refined
-    // scores at h0 < 0 (below) and h2 > 0 (above).
-    const QuadMax qb = fitQuadratic3x3(below), qa = fitQuadratic3x3(above);
-    const double h0 = std::log2(layerScale(k - 1) / tk), h2 = std::log2(layerScale(k + 1) / tk);
-    const double e0 = qb.value - qk.value, e2 = qa.value - qk.value;
-    const double det = h0 * h2 * (h0 - h2);
-    const double a = (e0 * h2 - e2 * h0) / det, b = (e2 * h0 * h0 - e0 * h2 * h2) / det;
-    if (a < 0) {
-      u = std::clamp(-b / (2 * a), h0, h2);
-      score = qk.value + b * u + a * u * u;
-      const QuadMax& qn = u > 0 ? qa : qb;
-      const double w = u > 0 ? u / h2 : u / h0;  // 0 at layer k, 1 at the neighbour layer
-      x0 += w * (level0(c.x, qn.du) - x0);
-      y0 += w * (level0(c.y, qn.dv) - y0);
-    }
-  }
-  c.x0 = static_cast<float>(x0);
-  c.y0 = static_cast<float>(y0);
-  c.scale = static_cast<float>(tk * std::exp2(u));
-  c.score = static_cast<float>(score);
-  return true;
 }
 
 // Intensity centroid: angle of (m10, m01) over the disc of radius r around pixel (x, y).

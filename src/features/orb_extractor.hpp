@@ -119,6 +119,7 @@ class OrbExtractor {
   const std::vector<std::array<std::int8_t, 4>>& pattern() const { return pattern_; }
 
  private:
+  static constexpr std::uint8_t kUnknownScore = 255;  // score not yet computed (FAST: 0..254)
   struct AreaTap {  // one target pixel of an area resampling: sum of w[t] * source[k[t]]
     std::array<int, 3> k{};
     std::array<float, 3> w{};
