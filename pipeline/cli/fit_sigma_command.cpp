@@ -1,5 +1,6 @@
-// svslam fit-sigma: calibrates the curvature -> sigma_d model of the dense stereo on ground truth
-// and checks it on held-apart cases.
+// svslam fit-sigma: calibrates the curvature -> sigma_d model of the dense stereo (or, with
+// --matcher points, of the sparse ZNCC matches of the corners) on ground truth and checks it on
+// held-apart cases.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +10,7 @@
 
 #include "pipeline/cli/commands.hpp"
 #include "pipeline/cli/json_writer.hpp"
+#include "pipeline/cli/point_sigma_samples.hpp"
 #include "pipeline/cli/stereo_case.hpp"
 #include "pipeline/cli/stereo_options.hpp"
 #include "pipeline/thread_pool_executor.hpp"
@@ -52,6 +54,17 @@ Status collectSamples(const std::string& dir, const std::string& mask_kind,
   return Status::ok();
 }
 
+// Appends (kappa, |d - gt|) of every sparse match with ground truth of one case (the corner
+// detector and the point matcher at their default parameters, as `svslam run` uses them).
+Status collectPointCase(const std::string& dir, const std::string& mask_kind,
+                        std::vector<float>& kappa, std::vector<float>& err) {
+  auto info = io::findStereoGtCase(dir, mask_kind, "");
+  if (!info) return info.status();
+  auto c = loadCase(*info, true, mask_kind == "nonocc");
+  if (!c) return c.status();
+  return collectPointSamples(*c, CornerParams{}, StereoMatchParams{}, kappa, err);
+}
+
 }  // namespace
 
 int runFitSigma(const std::vector<std::string>& args) {
@@ -60,9 +73,14 @@ int runFitSigma(const std::vector<std::string>& args) {
       "Fits the table kappa -> sigma_d (seed 001 fig. 3) on ground-truth cases: pixels are\n"
       "grouped by peak curvature kappa into equal-count bins and sigma is the 68.27th\n"
       "percentile of |d - d_true| in each bin (made non-increasing). Reports the share of\n"
-      "errors inside one sigma on the training cases and on held-apart cases.");
+      "errors inside one sigma on the training cases and on held-apart cases.\n"
+      "--matcher points fits the table of the sparse matches instead: corners (default\n"
+      "detector) matched by ZNCC along the row, kappa = 2 s(d) - s(d-1) - s(d+1) of the\n"
+      "score peak, every match with ground truth a sample (the stereo options are unused).");
   p.addOption("train", "DIR[,DIR...]", "ground-truth case folders to fit on", std::nullopt, true);
   p.addOption("holdout", "DIR[,DIR...]", "held-apart case folders to check the fit on");
+  p.addOption("matcher", "dense|points", "whose sigma to fit: dense census stereo or sparse ZNCC "
+              "matches of corners", "dense");
   p.addOption("mask-kind", "nonocc|all|disc", "evaluation mask of the cases", "nonocc");
   p.addOption("bins", "N", "number of curvature bins (2..200)", "16");
   p.addOption("samples-per-case", "N",
@@ -82,14 +100,19 @@ int runFitSigma(const std::vector<std::string>& args) {
   if (!threads) return fail(threads.status());
   ThreadPoolExecutor ex(*threads);
 
+  const std::string matcher = p.get("matcher");
+  if (matcher != "dense" && matcher != "points")
+    return fail(Status::invalidArgument("--matcher must be dense or points"));
+  auto collect = [&](const std::string& dir, std::vector<float>& k, std::vector<float>& e) {
+    if (matcher == "points") return collectPointCase(dir, p.get("mask-kind"), k, e);
+    return collectSamples(dir, p.get("mask-kind"), *params, ex, cap, k, e);
+  };
   std::vector<float> k_train, e_train, k_hold, e_hold;
   for (const auto& dir : splitList(p.get("train")))
-    if (Status s = collectSamples(dir, p.get("mask-kind"), *params, ex, cap, k_train, e_train); !s)
-      return fail(s);
+    if (Status s = collect(dir, k_train, e_train); !s) return fail(s);
   if (p.has("holdout"))
     for (const auto& dir : splitList(p.get("holdout")))
-      if (Status s = collectSamples(dir, p.get("mask-kind"), *params, ex, cap, k_hold, e_hold); !s)
-        return fail(s);
+      if (Status s = collect(dir, k_hold, e_hold); !s) return fail(s);
   auto model = fitSigmaModel(k_train, e_train, *bins);
   if (!model) return fail(model.status());
   if (p.has("out")) {
@@ -98,9 +121,12 @@ int runFitSigma(const std::vector<std::string>& args) {
     {
       std::ofstream f(tmp);
       if (!f) return fail(Status::ioError("cannot write " + path));
-      f << "# svslam sigma model: kappa (cost units / px / px^2) sigma_d (px); method "
-        << toString(params->cost) << ", window " << params->window_w << "x" << params->window_h
-        << "\n";
+      if (matcher == "points")
+        f << "# svslam sigma model: kappa (ZNCC / px^2) sigma_d (px); sparse ZNCC matches\n";
+      else
+        f << "# svslam sigma model: kappa (cost units / px / px^2) sigma_d (px); method "
+          << toString(params->cost) << ", window " << params->window_w << "x"
+          << params->window_h << "\n";
       char line[64];
       for (std::size_t i = 0; i < model->curvature.size(); ++i) {
         std::snprintf(line, sizeof line, "%.6g %.6g\n", model->curvature[i], model->sigma_px[i]);

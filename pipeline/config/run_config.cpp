@@ -50,7 +50,11 @@ Status readStereoMatch(ConfigReader& r, StereoMatchParams& m) {
   SVSLAM_TRY(r.read("stereo_match.recovery", m.recovery));
   SVSLAM_TRY(r.read("stereo_match.recovery_dist_th_px", m.recovery_dist_th_px, 0.01, 100));
   SVSLAM_TRY(r.read("stereo_match.recovery_margin_px", m.recovery_margin_px, 0, 64));
+  std::string sigma_mode = m.sigma_mode == StereoSigmaMode::kFixed ? "fixed" : "curvature";
+  SVSLAM_TRY(r.read("stereo_match.sigma_mode", sigma_mode, {"curvature", "fixed"}));
+  m.sigma_mode = sigma_mode == "fixed" ? StereoSigmaMode::kFixed : StereoSigmaMode::kCurvature;
   SVSLAM_TRY(r.read("stereo_match.sigma_d_px", m.sigma_d_px, 0.01, 10));
+  SVSLAM_TRY(r.read("stereo_match.min_sigma_d_px", m.min_sigma_d_px, 0, 10));
   if (m.max_disp_px <= m.min_disp_px)
     return Status::invalidArgument(r.name() +
                                    ": key 'stereo_match.max_disp_px' must be > min_disp_px");

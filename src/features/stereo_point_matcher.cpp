@@ -28,6 +28,14 @@ Status StereoMatchParams::validate() const {
     return Status::invalidArgument("stereo_match.recovery_margin_px must be >= 0");
   if (!(sigma_d_px > 0.0f) || !std::isfinite(sigma_d_px))
     return Status::invalidArgument("stereo_match.sigma_d_px must be > 0");
+  if (!(min_sigma_d_px >= 0.0f) || !std::isfinite(min_sigma_d_px))
+    return Status::invalidArgument("stereo_match.min_sigma_d_px must be >= 0");
+  if (sigma_mode != StereoSigmaMode::kCurvature && sigma_mode != StereoSigmaMode::kFixed)
+    return Status::invalidArgument("stereo_match.sigma_mode must be curvature or fixed");
+  if (sigma_mode == StereoSigmaMode::kCurvature) {
+    if (Status s = sigma_model.validate(); !s)
+      return Status::invalidArgument("stereo_match.sigma_model: " + s.message());
+  }
   return Status::ok();
 }
 
@@ -47,6 +55,15 @@ float parabolaPeak(float sm, float s0, float sp) {
 }
 
 }  // namespace
+
+void StereoPointMatcher::setPeak(int d, float sm, float s0, float sp, StereoMatch& m) const {
+  m.d_px = static_cast<float>(d) + parabolaPeak(sm, s0, sp);
+  m.score = s0;
+  m.curvature = std::max(0.0f, 2.0f * s0 - sm - sp);
+  m.sigma_d_px = params_.sigma_mode == StereoSigmaMode::kFixed
+                     ? params_.sigma_d_px
+                     : std::max(params_.min_sigma_d_px, params_.sigma_model.sigmaFor(m.curvature));
+}
 
 void StereoPointMatcher::scanRow(ImageView<const std::uint8_t> left,
                                  ImageView<const std::uint8_t> right, const PatchStats& ps, int y,
@@ -90,9 +107,7 @@ bool StereoPointMatcher::searchRow(ImageView<const std::uint8_t> left,
   if (best == 0 || best == d1 - d0) return false;
   const float sm = scores_[static_cast<std::size_t>(best - 1)];
   const float sp = scores_[static_cast<std::size_t>(best + 1)];
-  m.d_px = static_cast<float>(d0 + best) + parabolaPeak(sm, sb, sp);
-  m.score = sb;
-  m.sigma_d_px = params_.sigma_d_px;
+  setPeak(d0 + best, sm, sb, sp, m);
   return true;
 }
 
@@ -239,8 +254,9 @@ void StereoPointMatcher::recover(ImageView<const std::uint8_t> left,
       const float sm = scores_[static_cast<std::size_t>(i - 1)];
       const float sp = scores_[static_cast<std::size_t>(i + 1)];
       if (s0 < params_.min_zncc || s0 < sm || s0 < sp) continue;
-      const float d = static_cast<float>(d0 + i) + parabolaPeak(sm, s0, sp);
-      const Eigen::Vector2d pb(r.u_px - d, r.v_px);
+      StereoMatch cand = r;
+      setPeak(d0 + i, sm, s0, sp, cand);
+      const Eigen::Vector2d pb(r.u_px - cand.d_px, r.v_px);
       double cost = 0;
       for (int k = 0; k < 3; ++k) {
         const StereoMatch& vk = kept[static_cast<std::size_t>(v[k])];
@@ -249,8 +265,7 @@ void StereoPointMatcher::recover(ImageView<const std::uint8_t> left,
       }
       if (cost < best_cost) {
         best_cost = static_cast<float>(cost);
-        best.d_px = d;
-        best.score = s0;
+        best = cand;
         found = true;
       }
     }

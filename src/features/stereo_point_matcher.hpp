@@ -18,8 +18,13 @@
 //    (V1 - d1, V2 - d2, V3 - d3), widened by recovery_margin_px, is a candidate P_B; the
 //    candidate minimising  sum_i | |P_A - P_AVi| - |P_B - P_BVi| |  is taken when that sum is
 //    below recovery_dist_th_px.
-// Every match carries sigma_d_px (a fixed documented value: the matching precision of the
-// sub-pixel fit, not calibrated per point).
+// Every match carries sigma_d_px, its disparity standard deviation. By default
+// (sigma_mode = kCurvature) it comes from the sharpness of the score peak (seed 001 fig. 3):
+// kappa = 2 s(d) - s(d-1) - s(d+1) (ZNCC units / px^2, the parabola of the sub-pixel fit has
+// second derivative -kappa), mapped through the calibrated table sigma_model (SigmaModel, fitted
+// on ground truth by `svslam fit-sigma --matcher points` so that ~68 % of disparity errors fall
+// inside one sigma), never below min_sigma_d_px. With sigma_mode = kFixed every match carries
+// sigma_d_px.
 #include <Eigen/Core>
 #include <cstdint>
 #include <vector>
@@ -28,8 +33,14 @@
 #include "core/status.hpp"
 #include "features/delaunay.hpp"
 #include "features/patch_similarity.hpp"
+#include "stereo/sigma_model.hpp"
 
 namespace svslam {
+
+enum class StereoSigmaMode {
+  kCurvature,  // sigma_d from the ZNCC peak curvature through sigma_model (default)
+  kFixed,      // sigma_d = sigma_d_px for every match
+};
 
 struct StereoMatchParams {
   int patch_half_px = 4;        // ZNCC patch (2h+1)^2, px, 1..15
@@ -45,7 +56,10 @@ struct StereoMatchParams {
   bool recovery = true;
   float recovery_dist_th_px = 3.0f;  // Dist_th of seed 002 eq. 11, px, > 0
   int recovery_margin_px = 2;        // widening of the triangle's disparity span, px, >= 0
-  float sigma_d_px = 0.3f;           // disparity standard deviation of a match, px, > 0
+  StereoSigmaMode sigma_mode = StereoSigmaMode::kCurvature;
+  float sigma_d_px = 0.3f;      // kFixed: disparity standard deviation of every match, px, > 0
+  float min_sigma_d_px = 0.0f;  // kCurvature: floor of the calibrated sigma_d, px, >= 0
+  SigmaModel sigma_model = SigmaModel::defaultZnccPoints();  // kCurvature: kappa -> sigma_d
   Status validate() const;
 };
 
@@ -55,6 +69,7 @@ struct StereoMatch {
   float v_px = 0;
   float d_px = 0;     // sub-pixel disparity, u_right = u - d
   float sigma_d_px = 0;
+  float curvature = 0;  // kappa = 2 s(d) - s(d-1) - s(d+1) at the integer peak, 1/px^2, >= 0
   float score = 0;    // zncc at the integer peak
   bool recovered = false;  // rejected by the continuity check, then recovered
 };
@@ -95,6 +110,8 @@ class StereoPointMatcher {
   // (ps.x - d, y), d in [d0, d1]. Precondition: every right patch inside the image.
   void scanRow(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                const PatchStats& ps, int y, int d0, int d1);
+  // Sub-pixel disparity, curvature and sigma_d of `m` from the scores at d-1, d, d+1.
+  void setPeak(int d, float sm, float s0, float sp, StereoMatch& m) const;
   void continuityCheck(std::vector<StereoMatch>& matches, std::vector<StereoMatch>& rejected);
   void recover(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                std::vector<StereoMatch>& kept, const std::vector<StereoMatch>& rejected);

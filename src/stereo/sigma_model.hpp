@@ -10,6 +10,10 @@
 // non-increasing; kappa below the first knot gives sigma_0, above the last gives the last sigma.
 // The table is fitted on ground truth (svslam fit-sigma; tests/stereo/sigma_calibration_test)
 // so that about 68 % of disparity errors fall inside one sigma.
+// The sparse ZNCC point matcher (features/stereo_point_matcher.hpp) uses the same model on its
+// score curve, where the peak is a maximum: kappa = 2 s0 - s- - s+ (ZNCC units per px^2, the
+// negated second difference of the scores at d-1, d, d+1), with its own table
+// (defaultZnccPoints, fitted by `svslam fit-sigma --matcher points`).
 #include <string>
 #include <vector>
 
@@ -23,6 +27,9 @@ struct SigmaModel {
 
   // The table fitted for census 9x7 with a 9x9 window on Middlebury (see docs/stereo.md).
   static SigmaModel defaultCensus();
+  // The table fitted for the sparse ZNCC matcher (9x9 patch, corners) on Middlebury (see
+  // docs/stereo.md); kappa = 2 s0 - s- - s+ of the ZNCC scores.
+  static SigmaModel defaultZnccPoints();
 
   // sigma_d (px) for curvature kappa; kappa <= 0 or NaN gives the largest sigma.
   float sigmaFor(float kappa) const;

@@ -165,7 +165,8 @@ TEST(StereoPointMatcher, SubPixelDisparityOnPlaneAndBox) {
     ASSERT_GE(m.index, 0);
     EXPECT_EQ(m.u_px, pts[static_cast<std::size_t>(m.index)].x());
     EXPECT_EQ(m.v_px, pts[static_cast<std::size_t>(m.index)].y());
-    EXPECT_FLOAT_EQ(m.sigma_d_px, 0.3f);
+    EXPECT_GT(m.curvature, 0.0f);
+    EXPECT_FLOAT_EQ(m.sigma_d_px, SigmaModel::defaultZnccPoints().sigmaFor(m.curvature));
     EXPECT_GE(m.score, 0.8f);
     err.push_back(errorOf(r.scene, m));
     if (err.back() > 1.0) ++bad;
@@ -509,6 +510,11 @@ TEST(StereoPointMatcher, BadParamsNameTheField) {
       {"recovery_margin_px", [](StereoMatchParams& p) { p.recovery_margin_px = -1; }},
       {"sigma_d_px", [](StereoMatchParams& p) { p.sigma_d_px = 0; }},
       {"sigma_d_px", [](StereoMatchParams& p) { p.sigma_d_px = INFINITY; }},
+      {"min_sigma_d_px", [](StereoMatchParams& p) { p.min_sigma_d_px = -0.1f; }},
+      {"min_sigma_d_px", [](StereoMatchParams& p) { p.min_sigma_d_px = NAN; }},
+      {"sigma_mode", [](StereoMatchParams& p) { p.sigma_mode = static_cast<StereoSigmaMode>(7); }},
+      {"sigma_model", [](StereoMatchParams& p) { p.sigma_model.sigma_px.back() = 5.0f; }},
+      {"sigma_model", [](StereoMatchParams& p) { p.sigma_model = SigmaModel{}; }},
   };
   EXPECT_TRUE(StereoMatchParams{}.validate().isOk());
   const Rendered& r = boxScene();
@@ -525,6 +531,47 @@ TEST(StereoPointMatcher, BadParamsNameTheField) {
     StereoMatchStats st;
     EXPECT_FALSE(m.process(r.left.cview(), r.right.cview(), {{100, 100}}, {}, out, st).isOk());
     EXPECT_TRUE(out.empty());
+  }
+}
+
+// sigma_d of a match: the calibrated table of its peak curvature (sharper peak, smaller sigma),
+// floored by min_sigma_d_px; in fixed mode sigma_d_px for every match. The disparities do not
+// depend on the mode.
+TEST(StereoPointMatcher, SigmaFromPeakCurvatureOrFixed) {
+  const Rendered& r = boxScene();
+  const auto pts = randomPixels(400, r.scene.w, r.scene.h, 321);
+  auto run = [&](const StereoMatchParams& p) {
+    StereoPointMatcher matcher(p);
+    EXPECT_TRUE(matcher.initStatus().isOk());
+    std::vector<StereoMatch> out;
+    StereoMatchStats st;
+    EXPECT_TRUE(matcher.process(r.left.cview(), r.right.cview(), pts, {}, out, st).isOk());
+    return out;
+  };
+  const auto curv = run(defaultParams());
+  ASSERT_GT(curv.size(), 100u);
+  StereoMatchParams fixed_p = defaultParams();
+  fixed_p.sigma_mode = StereoSigmaMode::kFixed;
+  const auto fixed = run(fixed_p);
+  StereoMatchParams floor_p = defaultParams();
+  floor_p.min_sigma_d_px = 0.4f;
+  const auto floored = run(floor_p);
+  ASSERT_EQ(curv.size(), fixed.size());
+  ASSERT_EQ(curv.size(), floored.size());
+  const SigmaModel model = SigmaModel::defaultZnccPoints();
+  for (std::size_t k = 0; k < curv.size(); ++k) {
+    EXPECT_EQ(curv[k].d_px, fixed[k].d_px);
+    EXPECT_EQ(curv[k].curvature, fixed[k].curvature);
+    // kappa = 2 s(d) - s(d-1) - s(d+1) >= 0 at an accepted maximum, at most 4 (ZNCC in [-1, 1]).
+    EXPECT_GE(curv[k].curvature, 0.0f);
+    EXPECT_LE(curv[k].curvature, 4.0f);
+    EXPECT_FLOAT_EQ(curv[k].sigma_d_px, model.sigmaFor(curv[k].curvature));
+    EXPECT_FLOAT_EQ(fixed[k].sigma_d_px, 0.3f);
+    EXPECT_FLOAT_EQ(floored[k].sigma_d_px, std::max(0.4f, curv[k].sigma_d_px));
+    for (std::size_t j = 0; j < k; ++j)
+      if (curv[j].curvature > curv[k].curvature) {
+        EXPECT_LE(curv[j].sigma_d_px, curv[k].sigma_d_px);
+      }
   }
 }
 

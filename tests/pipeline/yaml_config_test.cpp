@@ -46,6 +46,12 @@ TEST(RunConfig, ValuesAreApplied) {
   EXPECT_EQ(c.source, "kitti:/x");
   EXPECT_EQ(c.odometry.stereo_match.max_disp_px, 96);
   EXPECT_FLOAT_EQ(c.odometry.stereo_match.min_zncc, 0.7f);
+  EXPECT_EQ(c.odometry.stereo_match.sigma_mode, svslam::StereoSigmaMode::kCurvature);
+  RunConfig f;
+  ASSERT_TRUE(parseRunConfig("stereo_match: {sigma_mode: fixed, sigma_d_px: 0.4}\n", "f.yaml", f)
+                  .isOk());
+  EXPECT_EQ(f.odometry.stereo_match.sigma_mode, svslam::StereoSigmaMode::kFixed);
+  EXPECT_FLOAT_EQ(f.odometry.stereo_match.sigma_d_px, 0.4f);
   EXPECT_EQ(c.odometry.corners.response, svslam::CornerResponse::kShiTomasi);
   EXPECT_TRUE(c.odometry.motion.ransac);
   EXPECT_TRUE(c.odometry.dense);
@@ -64,6 +70,10 @@ TEST(RunConfig, BadValuesAreNamed) {
   EXPECT_NE(errorOf("stereo_match: {min_zncc: 3}\n").find("'stereo_match.min_zncc'"),
             std::string::npos);
   EXPECT_NE(errorOf("threads: two\n").find("'threads'"), std::string::npos);
+  EXPECT_NE(errorOf("stereo_match: {sigma_mode: median}\n").find("'stereo_match.sigma_mode'"),
+            std::string::npos);
+  EXPECT_NE(errorOf("stereo_match: {min_sigma_d_px: -1}\n").find("'stereo_match.min_sigma_d_px'"),
+            std::string::npos);
   EXPECT_NE(errorOf("threads: 0\n").find("out of range"), std::string::npos);
   EXPECT_NE(errorOf("motion: {ransac: maybe}\n").find("'motion.ransac'"), std::string::npos);
   EXPECT_NE(errorOf("detector: {response: fast}\n").find("harris"), std::string::npos);
