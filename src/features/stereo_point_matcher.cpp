@@ -32,10 +32,8 @@ Status StereoMatchParams::validate() const {
     return Status::invalidArgument("stereo_match.min_sigma_d_px must be >= 0");
   if (sigma_mode != StereoSigmaMode::kCurvature && sigma_mode != StereoSigmaMode::kFixed)
     return Status::invalidArgument("stereo_match.sigma_mode must be curvature or fixed");
-  if (sigma_mode == StereoSigmaMode::kCurvature) {
-    if (Status s = sigma_model.validate(); !s)
-      return Status::invalidArgument("stereo_match.sigma_model: " + s.message());
-  }
+  if (Status s = sigma_model.validate(); !s)  // checked in either mode: a bad table is a bad config
+    return Status::invalidArgument("stereo_match.sigma_model: " + s.message());
   return Status::ok();
 }
 
@@ -43,6 +41,10 @@ StereoPointMatcher::StereoPointMatcher(const StereoMatchParams& params)
     : params_(params), init_status_(params.validate()) {
   scores_.reserve(1024);
   row_.reserve(1024);
+  // Per match of a frame (continuity check, recovery); grown once past this for more points.
+  keep_.reserve(2048);
+  rejected_.reserve(2048);
+  tri_pts_.reserve(2048);
 }
 
 namespace {

@@ -18,13 +18,16 @@
 //    (V1 - d1, V2 - d2, V3 - d3), widened by recovery_margin_px, is a candidate P_B; the
 //    candidate minimising  sum_i | |P_A - P_AVi| - |P_B - P_BVi| |  is taken when that sum is
 //    below recovery_dist_th_px.
-// Every match carries sigma_d_px, its disparity standard deviation. By default
-// (sigma_mode = kCurvature) it comes from the sharpness of the score peak (seed 001 fig. 3):
+// Every match carries sigma_d_px, its disparity standard deviation. With sigma_mode = kFixed
+// (the default) it is sigma_d_px, a documented constant of the size the calibration gives the
+// typical match (docs/stereo.md). With kCurvature it comes from the sharpness of the score peak
+// (seed 001 fig. 3):
 // kappa = 2 s(d) - s(d-1) - s(d+1) (ZNCC units / px^2, the parabola of the sub-pixel fit has
 // second derivative -kappa), mapped through the calibrated table sigma_model (SigmaModel, fitted
 // on ground truth by `svslam fit-sigma --matcher points` so that ~68 % of disparity errors fall
-// inside one sigma), never below min_sigma_d_px. With sigma_mode = kFixed every match carries
-// sigma_d_px.
+// inside one sigma), never below min_sigma_d_px. kCurvature is not the default because, measured
+// downstream, it did not make the EKF's covariance more honest on real data and its EuRoC
+// trajectory was no better than VO (docs/slam.md).
 #include <Eigen/Core>
 #include <cstdint>
 #include <vector>
@@ -38,8 +41,8 @@
 namespace svslam {
 
 enum class StereoSigmaMode {
-  kCurvature,  // sigma_d from the ZNCC peak curvature through sigma_model (default)
-  kFixed,      // sigma_d = sigma_d_px for every match
+  kCurvature,  // sigma_d from the ZNCC peak curvature through sigma_model
+  kFixed,      // sigma_d = sigma_d_px for every match (default)
 };
 
 struct StereoMatchParams {
@@ -56,7 +59,7 @@ struct StereoMatchParams {
   bool recovery = true;
   float recovery_dist_th_px = 3.0f;  // Dist_th of seed 002 eq. 11, px, > 0
   int recovery_margin_px = 2;        // widening of the triangle's disparity span, px, >= 0
-  StereoSigmaMode sigma_mode = StereoSigmaMode::kCurvature;
+  StereoSigmaMode sigma_mode = StereoSigmaMode::kFixed;
   float sigma_d_px = 0.3f;      // kFixed: disparity standard deviation of every match, px, > 0
   float min_sigma_d_px = 0.0f;  // kCurvature: floor of the calibrated sigma_d, px, >= 0
   SigmaModel sigma_model = SigmaModel::defaultZnccPoints();  // kCurvature: kappa -> sigma_d

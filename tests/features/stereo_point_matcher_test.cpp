@@ -166,7 +166,7 @@ TEST(StereoPointMatcher, SubPixelDisparityOnPlaneAndBox) {
     EXPECT_EQ(m.u_px, pts[static_cast<std::size_t>(m.index)].x());
     EXPECT_EQ(m.v_px, pts[static_cast<std::size_t>(m.index)].y());
     EXPECT_GT(m.curvature, 0.0f);
-    EXPECT_FLOAT_EQ(m.sigma_d_px, SigmaModel::defaultZnccPoints().sigmaFor(m.curvature));
+    EXPECT_FLOAT_EQ(m.sigma_d_px, 0.3f);  // the default: fixed sigma_d
     EXPECT_GE(m.score, 0.8f);
     err.push_back(errorOf(r.scene, m));
     if (err.back() > 1.0) ++bad;
@@ -548,12 +548,13 @@ TEST(StereoPointMatcher, SigmaFromPeakCurvatureOrFixed) {
     EXPECT_TRUE(matcher.process(r.left.cview(), r.right.cview(), pts, {}, out, st).isOk());
     return out;
   };
-  const auto curv = run(defaultParams());
+  StereoMatchParams curv_p = defaultParams();
+  curv_p.sigma_mode = StereoSigmaMode::kCurvature;
+  const auto curv = run(curv_p);
   ASSERT_GT(curv.size(), 100u);
-  StereoMatchParams fixed_p = defaultParams();
-  fixed_p.sigma_mode = StereoSigmaMode::kFixed;
-  const auto fixed = run(fixed_p);
-  StereoMatchParams floor_p = defaultParams();
+  const auto fixed = run(defaultParams());  // kFixed is the default
+  EXPECT_EQ(defaultParams().sigma_mode, StereoSigmaMode::kFixed);
+  StereoMatchParams floor_p = curv_p;
   floor_p.min_sigma_d_px = 0.4f;
   const auto floored = run(floor_p);
   ASSERT_EQ(curv.size(), fixed.size());

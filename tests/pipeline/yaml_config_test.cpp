@@ -46,11 +46,11 @@ TEST(RunConfig, ValuesAreApplied) {
   EXPECT_EQ(c.source, "kitti:/x");
   EXPECT_EQ(c.odometry.stereo_match.max_disp_px, 96);
   EXPECT_FLOAT_EQ(c.odometry.stereo_match.min_zncc, 0.7f);
-  EXPECT_EQ(c.odometry.stereo_match.sigma_mode, svslam::StereoSigmaMode::kCurvature);
+  EXPECT_EQ(c.odometry.stereo_match.sigma_mode, svslam::StereoSigmaMode::kFixed);  // default
   RunConfig f;
-  ASSERT_TRUE(parseRunConfig("stereo_match: {sigma_mode: fixed, sigma_d_px: 0.4}\n", "f.yaml", f)
+  ASSERT_TRUE(parseRunConfig("stereo_match: {sigma_mode: curvature, sigma_d_px: 0.4}\n", "f.yaml", f)
                   .isOk());
-  EXPECT_EQ(f.odometry.stereo_match.sigma_mode, svslam::StereoSigmaMode::kFixed);
+  EXPECT_EQ(f.odometry.stereo_match.sigma_mode, svslam::StereoSigmaMode::kCurvature);
   EXPECT_FLOAT_EQ(f.odometry.stereo_match.sigma_d_px, 0.4f);
   EXPECT_EQ(c.odometry.corners.response, svslam::CornerResponse::kShiTomasi);
   EXPECT_TRUE(c.odometry.motion.ransac);
