@@ -23,7 +23,7 @@ void ThreadPoolExecutor::runTasks() {
   // Claims and runs tasks until none is left; called by workers and by the caller of parallelFor.
   for (;;) {
     int task;
-    const std::function<void(int)>* fn;
+    const TaskRef* fn;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (fn_ == nullptr || next_task_ >= num_tasks_) return;
@@ -51,7 +51,7 @@ void ThreadPoolExecutor::workerLoop() {
   }
 }
 
-void ThreadPoolExecutor::parallelFor(int num_tasks, const std::function<void(int)>& fn) {
+void ThreadPoolExecutor::parallelFor(int num_tasks, TaskRef fn) {
   if (num_tasks <= 0) return;
   if (workers_.empty() || num_tasks == 1) {
     for (int i = 0; i < num_tasks; ++i) fn(i);

@@ -3,7 +3,6 @@
 // parallelFor hands out task indices to the workers and the calling thread; it blocks until
 // every task is done. Threads start in the constructor and are joined in the destructor.
 #include <condition_variable>
-#include <functional>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -20,7 +19,7 @@ class ThreadPoolExecutor final : public Executor {
   ThreadPoolExecutor(const ThreadPoolExecutor&) = delete;
   ThreadPoolExecutor& operator=(const ThreadPoolExecutor&) = delete;
 
-  void parallelFor(int num_tasks, const std::function<void(int)>& fn) override;
+  void parallelFor(int num_tasks, TaskRef fn) override;
   int concurrency() const override { return static_cast<int>(workers_.size()) + 1; }
 
  private:
@@ -31,7 +30,7 @@ class ThreadPoolExecutor final : public Executor {
   std::mutex mutex_;
   std::condition_variable wake_;
   std::condition_variable done_;
-  const std::function<void(int)>* fn_ = nullptr;
+  const TaskRef* fn_ = nullptr;  // the running call's tasks
   int num_tasks_ = 0;
   int next_task_ = 0;
   int unfinished_ = 0;

@@ -63,6 +63,7 @@ Status RunWork::init() {
   }
   if (ekf_mode_) {
     if (Status s = cov_file_.open(out_dir_ + "/pose_covariance.txt"); !s) return s;
+    cov_line_.reserve(36 * 32);  // 36 numbers of at most 31 characters each
   }
   return Status::ok();
 }
@@ -181,13 +182,13 @@ Status RunWork::publish(FrameSlot& slot) {
   const SlamFrameResult& sr = slot.result;
   if (Status s = traj_.append(slot.frame.t_ns, sr.T_world_cam); !s) return s;
   if (ekf_mode_) {
-    std::string line;
+    cov_line_.clear();  // keeps its capacity (reserved in init)
     char num[32];
     for (int i = 0; i < 36; ++i) {
       std::snprintf(num, sizeof num, "%s%.9e", i ? " " : "", sr.pose_cov(i / 6, i % 6));
-      line += num;
+      cov_line_ += num;
     }
-    if (Status s = cov_file_.append(line); !s) return s;
+    if (Status s = cov_file_.append(cov_line_); !s) return s;
   }
   if (slot.has_ground_truth) {
     if (Status s = gt_.append(slot.frame.t_ns, slot.T_gt_first_cam); !s) return s;

@@ -89,6 +89,7 @@ class RunWork final : public PipelineWork {
   // Publisher thread.
   run::TrajectoryWriter traj_, gt_;
   run::LineWriter cov_file_;
+  std::string cov_line_;  // one pose_covariance.txt line, reused
   run::RunSummary summary_;
   LatencyRecorder e2e_, stereo_ms_, estimate_ms_;
   std::int64_t last_seq_ = -1, seq_gaps_ = 0, next_stats_ns_ = 0;

@@ -96,21 +96,44 @@ Status writeLandmarksPly(const std::string& path, const std::vector<PlyLandmark>
   return writeFileAtomic(path, ss.str());
 }
 
-void StageTimes::add(const std::string& stage, double ms) {
-  auto it = samples_.find(stage);
+StageTimes::StageTimes(std::size_t capacity) : capacity_(std::max<std::size_t>(capacity, 1)) {}
+
+StageTimes::Samples& StageTimes::stage(std::string_view name) {
+  auto it = samples_.find(name);
   if (it == samples_.end()) {
-    order_.push_back(stage);
-    it = samples_.emplace(stage, std::vector<double>{}).first;
+    order_.emplace_back(name);
+    it = samples_.emplace(std::string(name), Samples{}).first;
+    it->second.ring.resize(capacity_);
   }
-  it->second.push_back(ms);
+  return it->second;
+}
+
+void StageTimes::push(Samples& s, double ms) const {
+  s.ring[s.next] = ms;
+  s.next = (s.next + 1) % capacity_;
+  s.kept_n = std::min(s.kept_n + 1, capacity_);
+  s.max_ms = s.count == 0 ? ms : std::max(s.max_ms, ms);
+  ++s.count;
+}
+
+void StageTimes::add(std::string_view stage_name, double ms) { push(stage(stage_name), ms); }
+
+std::vector<double> StageTimes::Samples::kept() const {
+  if (kept_n < ring.size())  // not wrapped yet: slots 0 .. kept_n - 1
+    return {ring.begin(), ring.begin() + static_cast<std::ptrdiff_t>(kept_n)};
+  std::vector<double> v(ring.begin() + static_cast<std::ptrdiff_t>(next), ring.end());
+  v.insert(v.end(), ring.begin(), ring.begin() + static_cast<std::ptrdiff_t>(next));
+  return v;
 }
 
 void StageTimes::merge(const StageTimes& other) {
-  for (const std::string& stage : other.order_) {
-    const auto& v = other.samples_.at(stage);
-    if (!samples_.count(stage)) order_.push_back(stage);
-    auto& mine = samples_[stage];
-    mine.insert(mine.end(), v.begin(), v.end());
+  for (const std::string& name : other.order_) {
+    const Samples& theirs = other.samples_.find(name)->second;
+    Samples& mine = stage(name);
+    for (const double ms : theirs.kept()) push(mine, ms);
+    // Samples `other` no longer keeps still count, and its max covers them.
+    mine.count += theirs.count - static_cast<std::int64_t>(theirs.kept_n);
+    if (theirs.count > 0) mine.max_ms = std::max(mine.max_ms, theirs.max_ms);
   }
 }
 
@@ -122,9 +145,9 @@ double percentile(std::vector<double> v, double p) {
   return v[i - 1];
 }
 
-double StageTimes::median(const std::string& stage) const {
-  auto it = samples_.find(stage);
-  return it == samples_.end() ? NAN : percentile(it->second, 50);
+double StageTimes::median(const std::string& name) const {
+  auto it = samples_.find(name);
+  return it == samples_.end() ? NAN : percentile(it->second.kept(), 50);
 }
 
 std::string StageTimes::json() const {
@@ -134,11 +157,11 @@ std::string StageTimes::json() const {
   ss << "{";
   bool first = true;
   for (const auto& name : order_) {
-    const auto& v = samples_.at(name);
+    const Samples& st = samples_.find(name)->second;
+    const std::vector<double> v = st.kept();
     ss << (first ? "" : ", ") << "\"" << name << "\": {\"p50_ms\": " << percentile(v, 50)
-       << ", \"p99_ms\": " << percentile(v, 99)
-       << ", \"max_ms\": " << *std::max_element(v.begin(), v.end())
-       << ", \"count\": " << v.size() << "}";
+       << ", \"p99_ms\": " << percentile(v, 99) << ", \"max_ms\": " << st.max_ms
+       << ", \"count\": " << st.count << "}";
     first = false;
   }
   ss << "}";

@@ -7,9 +7,12 @@
 //   groundtruth_kitti.txt the source's exact poses, when it has them (synthetic),
 //   stats.json            written at the end (atomically), also after a failure.
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/status.hpp"
@@ -64,9 +67,13 @@ struct PlyLandmark {
 Status writeLandmarksPly(const std::string& path, const std::vector<PlyLandmark>& landmarks);
 
 // Per-stage durations in milliseconds, summarised as p50 / p99 / max.
+// Each stage keeps its newest `capacity` samples in a ring allocated when the stage is first
+// seen, so add() allocates nothing afterwards; percentiles are over the kept samples, max and
+// count over every sample added.
 class StageTimes {
  public:
-  void add(const std::string& stage, double ms);
+  explicit StageTimes(std::size_t capacity = std::size_t{1} << 15);  // samples kept per stage
+  void add(std::string_view stage, double ms);
   // {"stage": {"p50_ms": .., "p99_ms": .., "max_ms": .., "count": n}, ...} in insertion order.
   std::string json() const;
   double median(const std::string& stage) const;  // NaN when no sample
@@ -74,8 +81,20 @@ class StageTimes {
   void merge(const StageTimes& other);
 
  private:
+  struct Samples {
+    std::vector<double> ring;  // capacity_ slots, ms
+    std::size_t next = 0;      // slot of the next sample
+    std::size_t kept_n = 0;    // slots holding a sample (<= ring.size())
+    std::int64_t count = 0;    // samples ever added (kept or not)
+    double max_ms = 0;
+    std::vector<double> kept() const;  // the kept samples, oldest first
+  };
+  Samples& stage(std::string_view name);
+  void push(Samples& s, double ms) const;
+
+  std::size_t capacity_;
   std::vector<std::string> order_;
-  std::map<std::string, std::vector<double>> samples_;
+  std::map<std::string, Samples, std::less<>> samples_;
 };
 
 // Nearest-rank percentile (p in [0, 100]) of `v` (copied, sorted); NaN when empty.

@@ -26,7 +26,17 @@ Status TemporalMatchParams::validate() const {
 }
 
 TemporalMatcher::TemporalMatcher(const TemporalMatchParams& params)
-    : params_(params), init_status_(params.validate()) {}
+    : params_(params), init_status_(params.validate()) {
+  // Per point of a frame; grown once past this when a frame has more points.
+  constexpr std::size_t kPoints = 2048;
+  order_.reserve(kPoints);
+  fill_.reserve(kPoints);
+  best_prev_of_cur_.reserve(kPoints);
+  best_score_of_cur_.reserve(kPoints);
+  cand_.reserve(kPoints);
+  keep_.reserve(kPoints);
+  neighbours_.reserve(kPoints);
+}
 
 void TemporalMatcher::buildGrid(const std::vector<TrackPoint>& cur, int width, int height,
                                 float cell) {
@@ -141,8 +151,7 @@ void TemporalMatcher::geometricCheck(const std::vector<TrackPoint>& prev,
   const int g = std::min<int>(params_.group_size, static_cast<int>(n) - 1);
   if (g < 2) return;
   keep_.assign(n, 0);
-  std::vector<std::pair<float, int>> nb;  // small; reserved once per call
-  nb.reserve(n);
+  std::vector<std::pair<float, int>>& nb = neighbours_;
   for (std::size_t i = 0; i < n; ++i) {
     const TrackPoint& pi = prev[static_cast<std::size_t>(matches[i].prev)];
     const TrackPoint& ci = cur[static_cast<std::size_t>(matches[i].cur)];

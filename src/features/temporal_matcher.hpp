@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "core/camera.hpp"
@@ -87,6 +88,7 @@ class TemporalMatcher {
   std::vector<float> best_score_of_cur_;
   std::vector<TemporalMatch> cand_;
   std::vector<std::uint8_t> keep_;
+  std::vector<std::pair<float, int>> neighbours_;  // geometric check: (squared px distance, match)
 };
 
 }  // namespace svslam

@@ -68,6 +68,13 @@ Status VisualMotionParams::validate() const {
 
 VisualMotion::VisualMotion(const VisualMotionParams& params) : params_(params) {
   init_status_ = params_.validate();
+  // Per point pair; grown once past this when a frame has more pairs.
+  constexpr std::size_t kPairs = 2048;
+  active_.reserve(kPairs);
+  weight_.reserve(kPairs);
+  inliers_.reserve(kPairs);
+  kept_.reserve(kPairs);
+  residuals_.reserve(kPairs);
 }
 
 Status VisualMotion::process(const std::vector<PointPair>& pairs, VisualMotionResult& out) {

@@ -32,6 +32,7 @@ StereoOdometry::StereoOdometry(const StereoOdometryParams& params, const StereoC
     cur_.reserve(2048);
     matches_.reserve(2048);
     pairs_.reserve(2048);
+    motion_result_.inlier.reserve(2048);
   }
 }
 
@@ -241,13 +242,16 @@ Status StereoOdometry::estimateMotion(const std::vector<std::uint8_t>* exclude,
       const TrackPoint& c = cur_[static_cast<std::size_t>(m.cur)];
       pairs_.push_back({p.p_cam, p.cov, c.p_cam, c.cov});
     }
-    VisualMotionResult vm;
+    VisualMotionResult& vm = motion_result_;
+    // Failure reasons are written into out.failure's own buffer (no temporary string).
     if (static_cast<int>(pairs_.size()) < params_.min_matches) {
-      out.failure = "too few temporal matches (" + std::to_string(pairs_.size()) + ")";
+      out.failure.assign("too few temporal matches (")
+          .append(std::to_string(pairs_.size()))
+          .append(")");
     } else if (Status ms = motion_.process(pairs_, vm); !ms) {
-      out.failure = "motion estimation: " + ms.message();
+      out.failure.assign("motion estimation: ").append(ms.message());
     } else if (!vm.T_cur_prev.matrix().allFinite() || !vm.covariance.allFinite()) {
-      out.failure = "motion estimation: non-finite result";
+      out.failure.assign("motion estimation: non-finite result");
     } else {
       out.tracked = true;
       T_cur_prev = vm.T_cur_prev;

@@ -118,6 +118,7 @@ class StereoOdometry {
   const DisparityResult* disp_ = nullptr;  // the current frame's dense disparity, if any
   TemporalMatcher temporal_matcher_;
   VisualMotion motion_;
+  VisualMotionResult motion_result_;  // reused every frame (its inlier flags keep capacity)
   std::unique_ptr<FeatureClusters> clusterer_;
   std::vector<Cluster> prev_clusters_, cur_clusters_;
   RoiSet roi_;

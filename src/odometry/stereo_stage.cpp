@@ -41,6 +41,12 @@ StereoStage::StereoStage(const StereoOdometryParams& params, const StereoCalibra
     init_status_ = dense_->initStatus();
   }
   if (init_status_) corners_.reserve(2048);
+  // Points per frame: the detector's bucketing bounds them (cells x kept per cell).
+  const bool orb = params.detector == PointDetector::kOrb;
+  const int cells = orb ? params.orb.grid_cols * params.orb.grid_rows
+                        : params.corners.grid_cols * params.corners.grid_rows;
+  const int per_cell = orb ? params.orb.max_per_cell : params.corners.max_per_cell;
+  max_points_ = static_cast<std::size_t>(cells) * static_cast<std::size_t>(per_cell);
 }
 
 StereoStage::~StereoStage() = default;
@@ -74,6 +80,9 @@ Status StereoStage::detect(ImageView<const std::uint8_t> left, StereoStageOutput
   if (!init_status_) return init_status_;
   out.corner_px.clear();
   out.corner_resp.clear();
+  // A pooled output is sized once for the bound (no growth frame after frame).
+  out.corner_px.reserve(max_points_);
+  out.corner_resp.reserve(max_points_);
   out.max_response = 0.0f;
   if (orb_) {
     if (Status s = orb_->process(left, orb_kp_, orb_desc_); !s) return s;
@@ -96,6 +105,7 @@ Status StereoStage::match(ImageView<const std::uint8_t> left, ImageView<const st
                           ImageView<const float> prior,
                           const std::vector<Eigen::Vector2i>* ranges, StereoStageOutput& out) {
   if (!init_status_) return init_status_;
+  out.stereo.reserve(std::max(max_points_, out.corner_px.size()));  // at most one per point
   return stereo_matcher_.process(left, right, out.corner_px, prior, out.stereo, out.stereo_stats,
                                  ranges);
 }

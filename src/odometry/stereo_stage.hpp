@@ -72,6 +72,7 @@ class StereoStage {
   std::vector<Corner> corners_;
   StereoPointMatcher stereo_matcher_;
   std::unique_ptr<DenseStereo> dense_;
+  std::size_t max_points_ = 0;  // bound of the points detected per frame
 };
 
 }  // namespace svslam

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <string_view>
 
 #include "motion/visual_motion.hpp"
 #include "simd/matrix_kernels.hpp"
@@ -31,22 +32,25 @@ CovarianceFault covarianceFault(const Eigen::Matrix<double, N, N>& C, bool defin
   return CovarianceFault::kNone;
 }
 
-// covarianceFault with a message naming `what`.
+// covarianceFault with a message naming `what` (the message is built only on failure).
 template <int N>
 Status checkCovariance(const Eigen::Matrix<double, N, N>& C, bool definite,
-                       const std::string& what) {
+                       std::string_view what) {
+  const char* problem = nullptr;
   switch (covarianceFault<N>(C, definite)) {
     case CovarianceFault::kNone:
       return Status::ok();
     case CovarianceFault::kNonFinite:
-      return Status::invalidArgument(what + " has non-finite entries");
+      problem = " has non-finite entries";
+      break;
     case CovarianceFault::kAsymmetric:
-      return Status::invalidArgument(what + " is not symmetric");
+      problem = " is not symmetric";
+      break;
     case CovarianceFault::kNotPositive:
+      problem = definite ? " is not positive definite" : " is not positive semi-definite";
       break;
   }
-  return Status::invalidArgument(
-      what + (definite ? " is not positive definite" : " is not positive semi-definite"));
+  return Status::invalidArgument(std::string(what) + problem);
 }
 
 // M <- (M + M^T) / 2 for a square M: exactly symmetric.
@@ -55,12 +59,13 @@ void symmetrise(Eigen::Ref<Eigen::MatrixXd> M) {
     for (Eigen::Index r = c + 1; r < M.rows(); ++r) M(r, c) = M(c, r) = 0.5 * (M(r, c) + M(c, r));
 }
 
-Status checkRigid(const Eigen::Isometry3d& T, const std::string& what) {
-  if (!T.matrix().allFinite()) return Status::invalidArgument(what + " has non-finite entries");
+Status checkRigid(const Eigen::Isometry3d& T, std::string_view what) {
+  if (!T.matrix().allFinite())
+    return Status::invalidArgument(std::string(what) + " has non-finite entries");
   const Eigen::Matrix3d& R = T.linear();
   if ((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 ||
       R.determinant() < 0)
-    return Status::invalidArgument(what + " rotation is not a rotation matrix");
+    return Status::invalidArgument(std::string(what) + " rotation is not a rotation matrix");
   return Status::ok();
 }
 
@@ -119,6 +124,10 @@ Status EkfSlam::reset(const Eigen::Isometry3d& T_world_cam, const Matrix6d& P0) 
   ids_.clear();
   P_.topLeftCorner<6, 6>() = 0.5 * (P0 + P0.transpose());
   return Status::ok();
+}
+
+void EkfSlam::reserveIds(int n) {
+  slot_of_id_.reserve(static_cast<std::size_t>(std::max(n, 0)));
 }
 
 int EkfSlam::slotOf(int id) const {

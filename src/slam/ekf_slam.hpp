@@ -44,10 +44,12 @@
 // Removal (retirement) deletes the landmark's rows and columns (the last landmark takes its
 // place in the state) and returns its final position and 3x3 covariance.
 //
-// Storage: P for max_landmarks is allocated in the constructor; predict, update (up to
-// max_batch_observations per batch), addLandmark and removeLandmark allocate nothing of their
-// own once `results` has reached its size (Eigen's matrix products still take their blocking
-// workspace from the heap for large operands).
+// Storage: P for max_landmarks is allocated in the constructor (the state works on its
+// top-left stateDim() block, so adding a landmark never reallocates); predict, update (up to
+// max_batch_observations per batch), addLandmark and removeLandmark allocate nothing once
+// `results` has reached its size and while ids stay below reserveIds() (the products run in the
+// matrix kernels on preallocated workspaces; without hardware FMA, Eigen's products may take
+// their blocking workspace from the heap for large operands).
 // Inputs are checked before anything changes: non-finite values, non-rotations, covariances
 // that are not symmetric positive (semi-)definite and unknown ids are rejected with a Status
 // naming the problem, and the filter is left untouched. A numerical failure inside an update
@@ -122,6 +124,9 @@ class EkfSlam {
   int numLandmarks() const { return static_cast<int>(ids_.size()); }
   const std::vector<int>& landmarkIds() const { return ids_; }  // in state order
   int stateDim() const { return 6 + 3 * numLandmarks(); }
+  // Preallocates the id -> state slot table for ids 0 .. n - 1 (ids are never reused, so the
+  // table grows with every landmark ever added; beyond n it grows by doubling).
+  void reserveIds(int n);
   // The full symmetric covariance, stateDim()^2, in the order [pose, landmarkIds()...].
   // Allocates: for tests and diagnostics.
   Eigen::MatrixXd covariance() const;

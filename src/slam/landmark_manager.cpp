@@ -5,29 +5,42 @@
 
 namespace svslam {
 
+LandmarkManager::LandmarkManager(int patch_half_px, int reserve_landmarks)
+    : h_(patch_half_px), big_(2 * patch_half_px) {
+  const std::size_t n = static_cast<std::size_t>(std::max(reserve_landmarks, 0));
+  info_.reserve(n);
+  views_.reserve(n);
+  patches_.reserve(n * patchBytes());
+}
+
 void LandmarkManager::add(int id, int frame, ImageView<const std::uint8_t> img, int x, int y,
                           const Eigen::Isometry3d& T_world_cam, const Eigen::Vector3d& p_cam) {
+  const std::size_t k = static_cast<std::size_t>(id);
+  if (k >= info_.size()) {
+    info_.resize(k + 1);
+    views_.resize(k + 1);
+    patches_.resize((k + 1) * patchBytes());
+  }
+  if (info_[k].id != id) ++count_;
   MapLandmark m;
   m.id = id;
   m.active = true;
   m.created_frame = frame;
-  info_[id] = m;
-  observed(id, frame);
-  info_[id].observations = 0;
-  views_[id] = {T_world_cam.linear(), p_cam};
+  m.last_seen_frame = frame;
+  info_[k] = m;
+  views_[k] = {T_world_cam.linear(), p_cam};
   const int s = 2 * big_ + 1;
-  std::vector<std::uint8_t>& p = patches_[id];
-  p.resize(static_cast<std::size_t>(s * s));
+  std::uint8_t* p = patches_.data() + k * patchBytes();
   for (int dy = -big_; dy <= big_; ++dy)
     for (int dx = -big_; dx <= big_; ++dx)
-      p[static_cast<std::size_t>((dy + big_) * s + dx + big_)] =
+      p[(dy + big_) * s + dx + big_] =
           img(std::clamp(x + dx, 0, img.width - 1), std::clamp(y + dy, 0, img.height - 1));
 }
 
 bool LandmarkManager::templateFor(int id, const Eigen::Matrix3d& R_world_cam,
                                   const Eigen::Vector3d& p_cam_now, double f_px,
                                   std::uint8_t* out) const {
-  const View& v = views_.at(id);
+  const View& v = views_[static_cast<std::size_t>(id)];
   const double z = p_cam_now.z();
   if (!(z > 0.0) || !(v.p_cam.z() > 0.0)) return false;
   Eigen::Matrix<double, 2, 3> J;
@@ -37,7 +50,7 @@ bool LandmarkManager::templateFor(int id, const Eigen::Matrix3d& R_world_cam,
   const double det = A.determinant();
   if (!(std::abs(det) > 1e-6)) return false;
   const Eigen::Matrix2d Ai = A.inverse();  // delta_init = Ai delta_now
-  const std::vector<std::uint8_t>& p = patches_.at(id);
+  const std::uint8_t* p = patches_.data() + static_cast<std::size_t>(id) * patchBytes();
   const int s = 2 * big_ + 1;
   for (int dy = -h_; dy <= h_; ++dy)
     for (int dx = -h_; dx <= h_; ++dx) {
@@ -56,7 +69,7 @@ bool LandmarkManager::templateFor(int id, const Eigen::Matrix3d& R_world_cam,
 }
 
 void LandmarkManager::observed(int id, int frame) {
-  MapLandmark& m = info_.at(id);
+  MapLandmark& m = info(id);
   m.last_seen_frame = frame;
   ++m.observations;
 }

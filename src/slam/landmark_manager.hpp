@@ -11,10 +11,12 @@
 // view (templateFor), when they were last observed, and, once
 // retired from the filter state, their final position and covariance (kept in the map file, out
 // of the state).
+// Storage: flat vectors indexed by id (ids are small, dense and never reused: EkfSlam's), sized
+// for `reserve_landmarks` ids at construction; beyond that they grow by doubling (one allocation
+// per doubling, none per frame in between).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
-#include <map>
 #include <vector>
 
 #include "core/image.hpp"
@@ -39,7 +41,8 @@ struct MapLandmark {
 // Appearance and history of landmarks, by id.
 class LandmarkManager {
  public:
-  explicit LandmarkManager(int patch_half_px) : h_(patch_half_px), big_(2 * patch_half_px) {}
+  // `reserve_landmarks`: ids (0 .. reserve_landmarks - 1) whose storage is preallocated, >= 0.
+  LandmarkManager(int patch_half_px, int reserve_landmarks);
   int patchHalf() const { return h_; }
   int patchSide() const { return 2 * h_ + 1; }
   // Registers a new landmark initialised at integer pixel (x, y) of `img`, seen from
@@ -57,20 +60,30 @@ class LandmarkManager {
   // A new observation in `frame`.
   void observed(int id, int frame);
 
-  MapLandmark& info(int id) { return info_.at(id); }
-  const MapLandmark& info(int id) const { return info_.at(id); }
-  bool contains(int id) const { return info_.count(id) != 0; }
-  const std::map<int, MapLandmark>& all() const { return info_; }
+  // Landmark `id` (precondition: contains(id)).
+  MapLandmark& info(int id) { return info_[static_cast<std::size_t>(id)]; }
+  const MapLandmark& info(int id) const { return info_[static_cast<std::size_t>(id)]; }
+  bool contains(int id) const {
+    return id >= 0 && id < static_cast<int>(info_.size()) && info(id).id == id;
+  }
+  int size() const { return count_; }  // landmarks registered
+  // Indexed by id; entries of ids never registered have id -1.
+  const std::vector<MapLandmark>& all() const { return info_; }
 
  private:
   struct View {
     Eigen::Matrix3d R_world_cam;
     Eigen::Vector3d p_cam;
   };
+  std::size_t patchBytes() const {
+    return static_cast<std::size_t>((2 * big_ + 1) * (2 * big_ + 1));
+  }
   int h_, big_;
-  std::map<int, MapLandmark> info_;
-  std::map<int, View> views_;
-  std::map<int, std::vector<std::uint8_t>> patches_;
+  int count_ = 0;
+  std::vector<MapLandmark> info_;  // by id
+  std::vector<View> views_;        // by id
+  std::vector<std::uint8_t> patches_;  // by id, patchBytes() each: (4h+1)^2 grey levels
+
 };
 
 }  // namespace svslam

@@ -29,6 +29,10 @@
 //  5. bounded cost: at most ekf.max_landmarks in the state; to make room, the landmark unseen
 //     for the longest time (at least retire_unseen_frames) is retired: removed from the state,
 //     kept in the map with its last estimate.
+// Memory: every per-frame buffer is a member sized in the constructor (or grown once to the
+// frame's stereo point count); the map's bookkeeping is preallocated for map_reserve landmarks.
+// Once warm, a frame allocates nothing while fewer than map_reserve landmarks have ever been
+// initialised.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -68,6 +72,9 @@ struct SlamSystemParams {
   int retire_unseen_frames = 2;        // a landmark unseen for fewer frames is never retired
   double lost_rot_sigma_rad = 0.035;   // prediction covariance when the VME fails
   double lost_trans_sigma_m = 0.5;
+  int map_reserve = 4096;  // landmarks ever initialised (in the state or retired) whose map
+                           // storage is preallocated (about 0.7 kB each), >= ekf.max_landmarks;
+                           // beyond it the storage grows by doubling
   Status validate() const;
 };
 
@@ -120,6 +127,17 @@ class SlamSystem {
   void selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameResult& out);
   bool makeRoom(SlamFrameResult& out);
 
+  // A landmark of the state predicted inside the current image (searchLandmarks).
+  struct SearchPrediction {
+    int id = -1;
+    double u = 0, v = 0, d = 0;  // predicted pixel and disparity, px
+    double sigma_px = 0;         // of the projection, px
+    double sigma_d = 0;          // of the disparity, px
+    Eigen::Vector3d z_cam = Eigen::Vector3d::Zero();  // predicted point, camera frame, m
+    bool tracked = false;        // observed in the previous frame
+    int order = 0;               // position in the state: ties keep it (std::sort, no buffer)
+  };
+
   SlamSystemParams params_;
   StereoCalibration calib_;
   Status init_status_;
@@ -134,6 +152,8 @@ class SlamSystem {
   std::vector<Eigen::Vector2f> prev_landmark_uv_, landmark_uv_;  // observed landmarks, px
   std::vector<ObservationResult> results_;
   std::vector<float> scores_;
+  std::vector<SearchPrediction> preds_;  // landmarks predicted in the image, this frame
+  std::vector<int> fresh_;               // points matched for the first time, this frame
   std::vector<std::uint8_t> tmpl_;  // warped landmark template
   std::vector<int> cell_count_;
   int frame_ = 0;

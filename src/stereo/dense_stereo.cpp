@@ -379,7 +379,7 @@ Status DenseStereo::process(ImageView<const std::uint8_t> left, ImageView<const 
   out.sigma_d_px.resize(width_, height_);
   out.curvature.resize(width_, height_);
 
-  // The task lambdas capture two pointers only, so std::function stores them without allocating.
+  // The task lambdas capture two pointers only (the executor takes them by reference anyway).
   struct Frame {
     ImageView<const std::uint8_t> left, right;
     DisparityResult* out;

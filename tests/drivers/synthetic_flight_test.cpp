@@ -221,7 +221,7 @@ TEST(SyntheticFlight, RayCastDepthIsTheFirstSurfaceHit) {
 // Runs the tasks in reverse order: rendering must not depend on the task order.
 class ReverseExecutor final : public Executor {
  public:
-  void parallelFor(int n, const std::function<void(int)>& fn) override {
+  void parallelFor(int n, TaskRef fn) override {
     for (int i = n - 1; i >= 0; --i) fn(i);
   }
   int concurrency() const override { return 4; }

@@ -1,10 +1,17 @@
 // Heap allocations per frame in steady state, counted by replacing the global operator new.
 //  - The pipeline's own machinery (pooled slots, SPSC edges, stamps, latency recorders, the
 //    threads' hand-offs) allocates nothing per frame: asserted.
-//  - The full svslam work (stereo stage, odometry, EKF, writers) is measured and printed; its
-//    count is bounded loosely here (the EKF's dynamic-size algebra and the result strings still
-//    allocate), see docs/pipeline.md.
+//  - The full svslam work, counted per stage thread once warm: capture (synthetic renderer),
+//    estimator (temporal matching, VME, EKF, landmark bookkeeping, stage times) and publisher
+//    (output files, stats) allocate nothing per frame: asserted. The stereo stage still
+//    allocates now and then, when a frame holds more local maxima in a grid cell than any frame
+//    before (the corner detector's per-cell candidate lists, src/features/corner_detector.cpp):
+//    counted, printed and bounded; see docs/pipeline.md.
+// With SVSLAM_ALLOC_TRACE=1 in the environment, every allocation counted in the full-work window
+// prints a backtrace on stderr (addresses: resolve with addr2line -f -C -i -e <test binary>).
+#include <execinfo.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cstdio>
@@ -16,6 +23,7 @@
 #include "pipeline/config/run_config.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
 #include "pipeline/realtime/stage_work.hpp"
+#include "pipeline/run/run_outputs.hpp"
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define SVSLAM_COUNT_ALLOCATIONS 0  // the sanitizers own operator new: counting is skipped
@@ -25,6 +33,29 @@
 
 namespace {
 std::atomic<std::int64_t> g_allocations{0};
+// Per pipeline stage (thread_local tag set by CountingWork): 0 untagged, 1 capture, 2 stereo,
+// 3 estimator, 4 publisher.
+std::atomic<std::int64_t> g_stage_allocations[5] = {};
+thread_local int t_stage = 0;
+std::atomic<bool> g_trace{false};  // SVSLAM_ALLOC_TRACE and inside the counted window
+#if SVSLAM_COUNT_ALLOCATIONS
+thread_local bool t_tracing = false;
+
+// Backtrace of one allocation, written straight to stderr (no allocation of its own once
+// backtrace() has been called once, which loads its unwinder).
+void traceAllocation(std::size_t bytes) {
+  if (!g_trace.load(std::memory_order_relaxed) || t_tracing) return;
+  t_tracing = true;
+  void* frames[24];
+  const int n = backtrace(frames, 24);
+  char head[48];
+  const int len = std::snprintf(head, sizeof head, "allocation of %zu bytes:\n", bytes);
+  [[maybe_unused]] const ssize_t written =
+      write(STDERR_FILENO, head, static_cast<std::size_t>(len));
+  backtrace_symbols_fd(frames, n, STDERR_FILENO);
+  t_tracing = false;
+}
+#endif
 }  // namespace
 
 // The replacements below pair operator new with malloc and operator delete with free; GCC's
@@ -34,11 +65,15 @@ std::atomic<std::int64_t> g_allocations{0};
 #if SVSLAM_COUNT_ALLOCATIONS
 void* operator new(std::size_t n) {
   g_allocations.fetch_add(1, std::memory_order_relaxed);
+  g_stage_allocations[t_stage].fetch_add(1, std::memory_order_relaxed);
+  traceAllocation(n);
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
 void* operator new[](std::size_t n) {
   g_allocations.fetch_add(1, std::memory_order_relaxed);
+  g_stage_allocations[t_stage].fetch_add(1, std::memory_order_relaxed);
+  traceAllocation(n);
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
@@ -105,54 +140,126 @@ TEST(Allocations, PipelineMachineryAllocatesNothingPerFrame) {
   }
 }
 
-// Wraps the real work and counts allocations between two published frames.
+// Stage times: a known stage's samples go into its ring without allocating; the ring keeps the
+// newest `capacity` samples for the percentiles, count and max cover every sample.
+TEST(Allocations, StageTimesKeepTheNewestSamplesWithoutAllocating) {
+  run::StageTimes times(4);
+  times.add("ekf", 1.0);  // first sample of the stage: its ring is allocated here
+  const std::int64_t before = g_allocations.load();
+  for (int i = 2; i <= 10; ++i) times.add("ekf", static_cast<double>(i));
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(times.median("ekf"), 8.0);  // kept 7, 8, 9, 10: nearest rank 2 of 4
+  EXPECT_NE(times.json().find("\"max_ms\": 10.000, \"count\": 10"), std::string::npos)
+      << times.json();
+  run::StageTimes merged(8);
+  merged.add("ekf", 20.0);
+  merged.merge(times);  // kept 20, 7, 8, 9, 10; 11 samples in all
+  EXPECT_EQ(merged.median("ekf"), 9.0);
+  EXPECT_NE(merged.json().find("\"max_ms\": 20.000, \"count\": 11"), std::string::npos)
+      << merged.json();
+}
+
+// Wraps the real work, tags each stage's thread and takes the counts at two published frames.
 class CountingWork : public PipelineWork {
  public:
+  static constexpr int kStages = 5;
   CountingWork(RunWork& w, int first, int last) : w_(w), first_(first), last_(last) {}
-  Result<bool> capture(FrameSlot& s) override { return w_.capture(s); }
-  Status stereo(FrameSlot& s) override { return w_.stereo(s); }
-  Status estimate(FrameSlot& s) override { return w_.estimate(s); }
+  Result<bool> capture(FrameSlot& s) override {
+    t_stage = 1;
+    return w_.capture(s);
+  }
+  Status stereo(FrameSlot& s) override {
+    t_stage = 2;
+    return w_.stereo(s);
+  }
+  Status estimate(FrameSlot& s) override {
+    t_stage = 3;
+    return w_.estimate(s);
+  }
   Status publish(FrameSlot& s) override {
+    t_stage = 4;
     const Status st = w_.publish(s);
-    if (s.frame.index == first_) at_first_ = g_allocations.load();
-    if (s.frame.index == last_) at_last_ = g_allocations.load();
+    if (s.frame.index == first_) {
+      take(at_first_);
+      if (std::getenv("SVSLAM_ALLOC_TRACE")) {
+        void* warm[1];
+        backtrace(warm, 1);  // loads the unwinder before the window opens
+        g_trace = true;
+      }
+    }
+    if (s.frame.index == last_) {
+      take(at_last_);
+      g_trace = false;
+    }
     return st;
   }
-  std::int64_t at_first_ = -1, at_last_ = -1;
+  std::int64_t inWindow(int stage) const { return at_last_[stage] - at_first_[stage]; }
+  bool windowSeen() const { return at_first_[0] >= 0 && at_last_[0] >= 0; }
 
  private:
+  void take(std::int64_t (&at)[kStages]) {
+    for (int k = 0; k < kStages; ++k) at[k] = g_stage_allocations[k].load();
+  }
   RunWork& w_;
   int first_, last_;
+  std::int64_t at_first_[kStages] = {-1, -1, -1, -1, -1};
+  std::int64_t at_last_[kStages] = {-1, -1, -1, -1, -1};
 };
 
-TEST(Allocations, FullWorkPerFrameIsMeasured) {
+// The window opens once every pooled slot has carried a frame (slotsNeeded = 11 with the default
+// options; each slot's stereo output is sized on its first frame) and the per-point scratch
+// buffers have met this sequence's early frames. The EKF state needs no warm-up: P is
+// preallocated for max_landmarks, landmarks are added and retired inside it, and the map's
+// bookkeeping is preallocated for slam.map_reserve landmarks, far more than this run creates.
+// 20 frames are counted, published frames 30 to 50; threads = 1, so each stage's work runs on
+// its own thread and the per-thread counts are per stage.
+TEST(Allocations, FullWorkPerFrame) {
   if (!SVSLAM_COUNT_ALLOCATIONS)
     GTEST_SKIP() << "sanitizer build: the sanitizer's own operator new cannot be counted here";
-  auto src = io::openStereoSource("synthetic:width=320,height=240,frames=16");
+  constexpr int kFirst = 30, kLast = 50, kFrames = 52;
+  auto src = io::openStereoSource("synthetic:width=320,height=240,frames=52");
   ASSERT_TRUE(src.isOk()) << src.status().message();
   config::RunConfig cfg;
+  cfg.threads = 1;
   const std::string out = (std::filesystem::temp_directory_path() /
                            ("svslam_alloc_" + std::to_string(::getpid())))
                               .string();
   std::filesystem::create_directories(out);
   RunWork work(cfg, **src, out, nullptr);
   ASSERT_TRUE(work.init().isOk());
-  CountingWork counting(work, 5, 15);
+  CountingWork counting(work, kFirst, kLast);
   PipelineOptions o;
+  ASSERT_LT(PipelineRunner::slotsNeeded(o), kFirst);
   std::vector<std::unique_ptr<FrameSlot>> slots;
   for (int i = 0; i < PipelineRunner::slotsNeeded(o); ++i)
     slots.push_back(std::make_unique<FrameSlot>());
   PipelineRunner runner(o, counting);
   PipelineControl control;
   ASSERT_TRUE(runner.run(slots, control, nullptr).isOk());
+  const int frames = work.summary().frames, added = work.summary().added;
   ASSERT_TRUE(work.finish().isOk());
   std::filesystem::remove_all(out);
-  const double per_frame = static_cast<double>(counting.at_last_ - counting.at_first_) / 10.0;
-  std::printf("full svslam work (ekf, 320x240 synthetic): %.1f heap allocations per frame\n",
-              per_frame);
-  RecordProperty("allocations_per_frame", std::to_string(per_frame));
-  EXPECT_GE(per_frame, 0.0);
-  EXPECT_LT(per_frame, 20000.0);  // loose: catches a runaway (e.g. per-pixel allocation)
+  ASSERT_TRUE(counting.windowSeen());
+  EXPECT_EQ(frames, kFrames);
+  EXPECT_GT(added, 0);  // landmarks were initialised: the filter did its full work
+  const int n = kLast - kFirst;
+  std::printf("full svslam work (ekf, 320x240 synthetic), heap allocations over %d frames: "
+              "capture %lld, stereo %lld, estimator %lld, publisher %lld, other threads %lld\n",
+              n, static_cast<long long>(counting.inWindow(1)),
+              static_cast<long long>(counting.inWindow(2)),
+              static_cast<long long>(counting.inWindow(3)),
+              static_cast<long long>(counting.inWindow(4)),
+              static_cast<long long>(counting.inWindow(0)));
+  RecordProperty("stereo_allocations_in_window", std::to_string(counting.inWindow(2)));
+  const char* where = " (SVSLAM_ALLOC_TRACE=1 prints where)";
+  EXPECT_EQ(counting.inWindow(1), 0) << "capture" << where;
+  EXPECT_EQ(counting.inWindow(3), 0) << "estimator" << where;
+  EXPECT_EQ(counting.inWindow(4), 0) << "publisher" << where;
+  EXPECT_EQ(counting.inWindow(0), 0) << "pipeline threads" << where;
+  // Stereo stage: only the growth of the corner detector's cell lists named at the top (7 over
+  // this window when measured); at most one per frame on average. Make this 0 once the detector
+  // reserves their bound.
+  EXPECT_LE(counting.inWindow(2), n) << "stereo" << where;
 }
 
 }  // namespace

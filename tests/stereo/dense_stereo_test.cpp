@@ -70,7 +70,7 @@ bool sameBits(const ImageF32& a, const ImageF32& b) {
 class CountingExecutor final : public Executor {
  public:
   // Runs tasks in reverse order, to show the result does not depend on the order.
-  void parallelFor(int n, const std::function<void(int)>& fn) override {
+  void parallelFor(int n, TaskRef fn) override {
     for (int i = n - 1; i >= 0; --i) fn(i);
     calls += 1;
   }
