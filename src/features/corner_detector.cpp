@@ -22,6 +22,13 @@ std::vector<float> gaussian(double sigma, bool derivative) {
   return k;
 }
 
+// The order of the output within a cell: stronger first, equal responses in raster order of
+// the refined position (a strict weak order; fully equal corners are interchangeable).
+bool strongerFirst(const Corner& a, const Corner& c) {
+  if (a.response != c.response) return a.response > c.response;
+  return a.y_px != c.y_px ? a.y_px < c.y_px : a.x_px < c.x_px;
+}
+
 // Rows of stripe i of n over h rows.
 inline int stripeBegin(int i, int n, int h) { return static_cast<int>(static_cast<long>(h) * i / n); }
 
@@ -54,6 +61,7 @@ CornerDetector::CornerDetector(const CornerParams& params, int width, int height
   resp_.resize(width, height);
   stripes_.emplace_back(width, kd_, kg_, ki_);
   cells_.resize(static_cast<std::size_t>(params_.grid_cols * params_.grid_rows));
+  for (auto& cell : cells_) cell.reserve(static_cast<std::size_t>(params_.max_per_cell));
 }
 
 Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<Corner>& out) {
@@ -107,17 +115,22 @@ Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<
       cn.response = r;
       const int cx = std::min(params_.grid_cols - 1, x * params_.grid_cols / width_);
       const int cy = std::min(params_.grid_rows - 1, y * params_.grid_rows / height_);
-      cells[static_cast<std::size_t>(cy * params_.grid_cols + cx)].push_back(cn);
+      // Each cell keeps its max_per_cell best so far in a heap whose top is the worst of them
+      // (capacity reserved in the constructor: no allocation, whatever the image).
+      std::vector<Corner>& cell = cells[static_cast<std::size_t>(cy * params_.grid_cols + cx)];
+      if (cell.size() < static_cast<std::size_t>(params_.max_per_cell)) {
+        cell.push_back(cn);
+        std::push_heap(cell.begin(), cell.end(), strongerFirst);
+      } else if (strongerFirst(cn, cell.front())) {
+        std::pop_heap(cell.begin(), cell.end(), strongerFirst);
+        cell.back() = cn;
+        std::push_heap(cell.begin(), cell.end(), strongerFirst);
+      }
     }
   }
   for (auto& cell : cells) {
-    // Ties keep raster order (the order of insertion), as a stable sort would, without its buffer.
-    std::sort(cell.begin(), cell.end(), [](const Corner& a, const Corner& c) {
-      if (a.response != c.response) return a.response > c.response;
-      return a.y_px != c.y_px ? a.y_px < c.y_px : a.x_px < c.x_px;
-    });
-    const std::size_t keep = std::min(cell.size(), static_cast<std::size_t>(params_.max_per_cell));
-    out.insert(out.end(), cell.begin(), cell.begin() + static_cast<std::ptrdiff_t>(keep));
+    std::sort_heap(cell.begin(), cell.end(), strongerFirst);  // strongest first
+    out.insert(out.end(), cell.begin(), cell.end());
   }
   return Status::ok();
 }

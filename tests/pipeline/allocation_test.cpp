@@ -3,10 +3,8 @@
 //    threads' hand-offs) allocates nothing per frame: asserted.
 //  - The full svslam work, counted per stage thread once warm: capture (synthetic renderer),
 //    estimator (temporal matching, VME, EKF, landmark bookkeeping, stage times) and publisher
-//    (output files, stats) allocate nothing per frame: asserted. The stereo stage still
-//    allocates now and then, when a frame holds more local maxima in a grid cell than any frame
-//    before (the corner detector's per-cell candidate lists, src/features/corner_detector.cpp):
-//    counted, printed and bounded; see docs/pipeline.md.
+//    (output files, stats) and stereo (corners, stereo matching) allocate nothing per frame:
+//    asserted, with one thread per stage and with two-thread stage pools.
 // With SVSLAM_ALLOC_TRACE=1 in the environment, every allocation counted in the full-work window
 // prints a backtrace on stderr (addresses: resolve with addr2line -f -C -i -e <test binary>).
 #include <execinfo.h>
@@ -211,16 +209,19 @@ class CountingWork : public PipelineWork {
 // buffers have met this sequence's early frames. The EKF state needs no warm-up: P is
 // preallocated for max_landmarks, landmarks are added and retired inside it, and the map's
 // bookkeeping is preallocated for slam.map_reserve landmarks, far more than this run creates.
-// 20 frames are counted, published frames 30 to 50; threads = 1, so each stage's work runs on
-// its own thread and the per-thread counts are per stage.
-TEST(Allocations, FullWorkPerFrame) {
+// 20 frames are counted, published frames 30 to 50. With threads = 1 each stage's work runs on
+// its own thread and the per-thread counts are per stage; with threads = 2 the stage pools'
+// workers count as "other threads".
+class FullWork : public ::testing::TestWithParam<int> {};
+
+TEST_P(FullWork, AllocatesNothingPerFrame) {
   if (!SVSLAM_COUNT_ALLOCATIONS)
     GTEST_SKIP() << "sanitizer build: the sanitizer's own operator new cannot be counted here";
   constexpr int kFirst = 30, kLast = 50, kFrames = 52;
   auto src = io::openStereoSource("synthetic:width=320,height=240,frames=52");
   ASSERT_TRUE(src.isOk()) << src.status().message();
   config::RunConfig cfg;
-  cfg.threads = 1;
+  cfg.threads = GetParam();
   const std::string out = (std::filesystem::temp_directory_path() /
                            ("svslam_alloc_" + std::to_string(::getpid())))
                               .string();
@@ -243,9 +244,10 @@ TEST(Allocations, FullWorkPerFrame) {
   EXPECT_EQ(frames, kFrames);
   EXPECT_GT(added, 0);  // landmarks were initialised: the filter did its full work
   const int n = kLast - kFirst;
-  std::printf("full svslam work (ekf, 320x240 synthetic), heap allocations over %d frames: "
-              "capture %lld, stereo %lld, estimator %lld, publisher %lld, other threads %lld\n",
-              n, static_cast<long long>(counting.inWindow(1)),
+  std::printf("full svslam work (ekf, 320x240 synthetic, threads %d), heap allocations over %d "
+              "frames: capture %lld, stereo %lld, estimator %lld, publisher %lld, other threads "
+              "%lld\n",
+              GetParam(), n, static_cast<long long>(counting.inWindow(1)),
               static_cast<long long>(counting.inWindow(2)),
               static_cast<long long>(counting.inWindow(3)),
               static_cast<long long>(counting.inWindow(4)),
@@ -255,12 +257,11 @@ TEST(Allocations, FullWorkPerFrame) {
   EXPECT_EQ(counting.inWindow(1), 0) << "capture" << where;
   EXPECT_EQ(counting.inWindow(3), 0) << "estimator" << where;
   EXPECT_EQ(counting.inWindow(4), 0) << "publisher" << where;
-  EXPECT_EQ(counting.inWindow(0), 0) << "pipeline threads" << where;
-  // Stereo stage: only the growth of the corner detector's cell lists named at the top (7 over
-  // this window when measured); at most one per frame on average. Make this 0 once the detector
-  // reserves their bound.
-  EXPECT_LE(counting.inWindow(2), n) << "stereo" << where;
+  EXPECT_EQ(counting.inWindow(0), 0) << "pipeline threads and stage pools" << where;
+  EXPECT_EQ(counting.inWindow(2), 0) << "stereo" << where;
 }
+
+INSTANTIATE_TEST_SUITE_P(Threads, FullWork, ::testing::Values(1, 2));
 
 }  // namespace
 }  // namespace svslam::rt
