@@ -13,15 +13,14 @@
 #include <cstdio>
 
 #include "../stereo/real_data.hpp"
+#include "../stereo/sigma_samples.hpp"
 #include "pipeline/cli/point_sigma_samples.hpp"
 #include "stereo/sigma_model.hpp"
 
 namespace svslam {
 namespace {
 
-struct Samples {
-  std::vector<float> kappa, err;
-};
+using Samples = testing::SigmaSamples;
 
 Samples samplesOf(const std::string& sub) {
   Samples s;
@@ -46,17 +45,11 @@ TEST(PointSigmaCalibration, LeaveOneSceneOutCoverageIsAbout68Percent) {
       GTEST_SKIP() << "shared data absent: " << testing::dataDir() << "/" << c;
   std::vector<Samples> per_scene;
   for (const auto& c : scenes) per_scene.push_back(samplesOf(c));
+  const std::vector<double> coverage = testing::heldOutCoverages(per_scene, 8);
+  ASSERT_EQ(coverage.size(), scenes.size());
   double mean = 0;
   for (std::size_t h = 0; h < scenes.size(); ++h) {
-    std::vector<float> k, e;
-    for (std::size_t t = 0; t < scenes.size(); ++t) {
-      if (t == h) continue;
-      k.insert(k.end(), per_scene[t].kappa.begin(), per_scene[t].kappa.end());
-      e.insert(e.end(), per_scene[t].err.begin(), per_scene[t].err.end());
-    }
-    auto model = fitSigmaModel(k, e, 8);
-    ASSERT_TRUE(model.isOk()) << model.status().message();
-    const double cov = sigmaCoverage(*model, per_scene[h].kappa, per_scene[h].err);
+    const double cov = coverage[h];
     std::printf("held-out %-26s matches %5zu coverage %.3f\n", scenes[h].c_str(),
                 per_scene[h].kappa.size(), cov);
     EXPECT_GT(cov, 0.35) << scenes[h];
@@ -65,13 +58,9 @@ TEST(PointSigmaCalibration, LeaveOneSceneOutCoverageIsAbout68Percent) {
   }
   std::printf("mean held-out coverage %.3f\n", mean);
   EXPECT_NEAR(mean, 0.6827, 0.06);
-  std::vector<float> k, e;
-  for (const auto& s : per_scene) {
-    k.insert(k.end(), s.kappa.begin(), s.kappa.end());
-    e.insert(e.end(), s.err.begin(), s.err.end());
-  }
-  const double all = sigmaCoverage(SigmaModel::defaultZnccPoints(), k, e);
-  std::printf("built-in table coverage on all %zu matches %.3f\n", k.size(), all);
+  const Samples pooled = testing::pooledSamples(per_scene);
+  const double all = sigmaCoverage(SigmaModel::defaultZnccPoints(), pooled.kappa, pooled.err);
+  std::printf("built-in table coverage on all %zu matches %.3f\n", pooled.kappa.size(), all);
   EXPECT_NEAR(all, 0.6827, 0.03);
 }
 

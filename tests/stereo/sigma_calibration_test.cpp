@@ -8,14 +8,13 @@
 #include <cstdio>
 
 #include "real_data.hpp"
+#include "sigma_samples.hpp"
 #include "stereo/sigma_model.hpp"
 
 namespace svslam {
 namespace {
 
-struct Samples {
-  std::vector<float> kappa, err;
-};
+using Samples = testing::SigmaSamples;
 
 Samples samplesOf(const testing::CaseRun& run, std::size_t cap) {
   Samples all;
@@ -47,17 +46,11 @@ TEST(SigmaCalibration, LeaveOneSceneOutCoverageIsAbout68Percent) {
   std::vector<Samples> per_scene;
   for (const auto& c : scenes)
     per_scene.push_back(samplesOf(testing::runCase(c, DenseStereoParams{}), 100000));
+  const std::vector<double> coverage = testing::heldOutCoverages(per_scene, 12);
+  ASSERT_EQ(coverage.size(), scenes.size());
   double mean = 0;
   for (std::size_t h = 0; h < scenes.size(); ++h) {
-    std::vector<float> k, e;
-    for (std::size_t t = 0; t < scenes.size(); ++t) {
-      if (t == h) continue;
-      k.insert(k.end(), per_scene[t].kappa.begin(), per_scene[t].kappa.end());
-      e.insert(e.end(), per_scene[t].err.begin(), per_scene[t].err.end());
-    }
-    auto model = fitSigmaModel(k, e, 12);
-    ASSERT_TRUE(model.isOk()) << model.status().message();
-    const double cov = sigmaCoverage(*model, per_scene[h].kappa, per_scene[h].err);
+    const double cov = coverage[h];
     std::printf("held-out %-24s coverage %.3f\n", scenes[h].c_str(), cov);
     EXPECT_GT(cov, 0.45) << scenes[h];
     EXPECT_LT(cov, 0.85) << scenes[h];
@@ -66,12 +59,8 @@ TEST(SigmaCalibration, LeaveOneSceneOutCoverageIsAbout68Percent) {
   std::printf("mean held-out coverage %.3f\n", mean);
   EXPECT_NEAR(mean, 0.6827, 0.06);
   // The built-in model was fitted on all five: its coverage on them is about 68 %.
-  std::vector<float> k, e;
-  for (const auto& s : per_scene) {
-    k.insert(k.end(), s.kappa.begin(), s.kappa.end());
-    e.insert(e.end(), s.err.begin(), s.err.end());
-  }
-  EXPECT_NEAR(sigmaCoverage(SigmaModel::defaultCensus(), k, e), 0.6827, 0.03);
+  const Samples all = testing::pooledSamples(per_scene);
+  EXPECT_NEAR(sigmaCoverage(SigmaModel::defaultCensus(), all.kappa, all.err), 0.6827, 0.03);
 }
 
 }  // namespace

@@ -1,0 +1,43 @@
+#pragma once
+// Curvature / error samples of a ground-truth scene and the leave-one-scene-out honesty check
+// shared by the dense (tests/stereo) and sparse (tests/features) sigma calibration tests.
+#include <gtest/gtest.h>
+
+#include <cstddef>
+#include <vector>
+
+#include "stereo/sigma_model.hpp"
+
+namespace svslam::testing {
+
+struct SigmaSamples {
+  std::vector<float> kappa;  // peak curvature of each sample
+  std::vector<float> err;    // |d - d_true|, px
+};
+
+// All scenes' samples pooled, except scene `skip` (-1: none).
+inline SigmaSamples pooledSamples(const std::vector<SigmaSamples>& scenes, int skip = -1) {
+  SigmaSamples all;
+  for (std::size_t t = 0; t < scenes.size(); ++t) {
+    if (static_cast<int>(t) == skip) continue;
+    all.kappa.insert(all.kappa.end(), scenes[t].kappa.begin(), scenes[t].kappa.end());
+    all.err.insert(all.err.end(), scenes[t].err.begin(), scenes[t].err.end());
+  }
+  return all;
+}
+
+// For each scene h: fit a model with `bins` bins on the other scenes, and the share of scene h's
+// errors inside one sigma of it. Empty when a fit fails (reported as a test failure).
+inline std::vector<double> heldOutCoverages(const std::vector<SigmaSamples>& scenes, int bins) {
+  std::vector<double> cov;
+  for (std::size_t h = 0; h < scenes.size(); ++h) {
+    const SigmaSamples train = pooledSamples(scenes, static_cast<int>(h));
+    auto model = fitSigmaModel(train.kappa, train.err, bins);
+    EXPECT_TRUE(model.isOk()) << model.status().message();
+    if (!model) return {};
+    cov.push_back(sigmaCoverage(*model, scenes[h].kappa, scenes[h].err));
+  }
+  return cov;
+}
+
+}  // namespace svslam::testing
