@@ -59,6 +59,7 @@ CornerDetector::CornerDetector(const CornerParams& params, int width, int height
   kg_ = gaussian(params_.sigma_d_px, false);
   ki_ = gaussian(params_.sigma_i_px, false);
   resp_.resize(width, height);
+  maxima_x_.resize(static_cast<std::size_t>(width));
   stripes_.emplace_back(width, kd_, kg_, ki_);
   cells_.resize(static_cast<std::size_t>(params_.grid_cols * params_.grid_rows));
   for (auto& cell : cells_) cell.reserve(static_cast<std::size_t>(params_.max_per_cell));
@@ -94,7 +95,6 @@ Status CornerDetector::process(ImageView<const std::uint8_t> image, std::vector<
   const int b = params_.border_px;
   std::vector<std::vector<Corner>>& cells = cells_;
   for (auto& cell : cells) cell.clear();
-  maxima_x_.resize(static_cast<std::size_t>(width_));
   const simd::FloatRowKernels& kern = simd::floatRowKernels();
   for (int y = b; y < height_ - b; ++y) {
     const float* row = resp_.row(y);

@@ -2,15 +2,14 @@
 
 #include <algorithm>
 
-#include "simd/float_row_kernels.hpp"
-
 namespace svslam {
 namespace {
 
 // Taps of the largest kernel: radius ceil(3 sigma) with sigma <= 10 px (CornerParams::validate).
 constexpr int kMaxTaps = 64;
 
-// Horizontal pass of a padded row: out[x] = sum_j c[j] pad[x + 2r - j] = sum_j c[j] in(x - (j - r)).
+// Horizontal pass of a padded row:
+//   out[x] = sum_j c[j] pad[x + 2r - j] = sum_j c[j] in(x - (j - r)).
 void horizontal(const simd::FloatRowKernels& k, const float* pad, const std::vector<float>& c,
                 float* out, int w) {
   const int r = static_cast<int>(c.size() / 2);
@@ -24,7 +23,8 @@ void horizontal(const simd::FloatRowKernels& k, const float* pad, const std::vec
 CornerResponseRows::CornerResponseRows(int width, const std::vector<float>& kd,
                                        const std::vector<float>& kg,
                                        const std::vector<float>& ki)
-    : w_(width),
+    : kern_(simd::floatRowKernels()),
+      w_(width),
       rd_(static_cast<int>(kd.size() / 2)),
       ri_(static_cast<int>(ki.size() / 2)),
       stride_((static_cast<std::size_t>(width) + 15) / 16 * 16 + 16),
@@ -45,9 +45,17 @@ void CornerResponseRows::filterImageRow(const std::uint8_t* src, int y) {
   for (int i = 0; i < rd_; ++i) pad[i] = static_cast<float>(src[0]);
   for (int x = 0; x < w_; ++x) pad[x + rd_] = static_cast<float>(src[x]);
   for (int i = 0; i < rd_; ++i) pad[w_ + rd_ + i] = static_cast<float>(src[w_ - 1]);
-  const simd::FloatRowKernels& k = simd::floatRowKernels();
-  horizontal(k, pad, kd_, ringRow(hd_, 2 * rd_ + 1, y), w_);
-  horizontal(k, pad, kg_, ringRow(hg_, 2 * rd_ + 1, y), w_);
+  horizontal(kern_, pad, kd_, ringRow(hd_, 2 * rd_ + 1, y), w_);
+  horizontal(kern_, pad, kg_, ringRow(hg_, 2 * rd_ + 1, y), w_);
+}
+
+void CornerResponseRows::vertical(std::vector<float>& ring, const std::vector<float>& c, int y,
+                                  int h, float* out) {
+  const int slots = static_cast<int>(c.size()), r = slots / 2;
+  const float* taps[kMaxTaps];
+  for (int j = 0; j < slots; ++j)
+    taps[j] = ringRow(ring, slots, std::clamp(y - (j - r), 0, h - 1));
+  kern_.convolve(taps, c.data(), slots, out, w_);
 }
 
 void CornerResponseRows::integrateRow(std::vector<float>& padded, std::vector<float>& q_ring,
@@ -57,22 +65,14 @@ void CornerResponseRows::integrateRow(std::vector<float>& padded, std::vector<fl
     p[i] = p[ri_];
     p[w_ + ri_ + i] = p[w_ + ri_ - 1];
   }
-  horizontal(simd::floatRowKernels(), p, ki_, ringRow(q_ring, 2 * ri_ + 1, g), w_);
+  horizontal(kern_, p, ki_, ringRow(q_ring, 2 * ri_ + 1, g), w_);
 }
 
 void CornerResponseRows::tensorRow(int g, int h) {
-  const simd::FloatRowKernels& k = simd::floatRowKernels();
-  const int slots = 2 * rd_ + 1;
-  const float* td[kMaxTaps];
-  const float* tg[kMaxTaps];
-  for (int j = 0; j < slots; ++j) {
-    const int y = std::clamp(g - (j - rd_), 0, h - 1);
-    td[j] = ringRow(hd_, slots, y);
-    tg[j] = ringRow(hg_, slots, y);
-  }
-  k.convolve(td, kg_.data(), slots, gx_.data(), w_);  // Ix: kd along x, kg along y
-  k.convolve(tg, kd_.data(), slots, gy_.data(), w_);  // Iy: kg along x, kd along y
-  k.products(gx_.data(), gy_.data(), pxx_.data() + ri_, pyy_.data() + ri_, pxy_.data() + ri_, w_);
+  vertical(hd_, kg_, g, h, gx_.data());  // Ix: kd along x, kg along y
+  vertical(hg_, kd_, g, h, gy_.data());  // Iy: kg along x, kd along y
+  kern_.products(gx_.data(), gy_.data(), pxx_.data() + ri_, pyy_.data() + ri_, pxy_.data() + ri_,
+                 w_);
   integrateRow(pxx_, qxx_, g);
   integrateRow(pyy_, qyy_, g);
   integrateRow(pxy_, qxy_, g);
@@ -80,9 +80,7 @@ void CornerResponseRows::tensorRow(int g, int h) {
 
 float CornerResponseRows::process(ImageView<const std::uint8_t> image, bool harris, double k,
                                   int y0, int y1, ImageF32& resp) {
-  const simd::FloatRowKernels& kern = simd::floatRowKernels();
   const int h = image.height;
-  const int slots = 2 * ri_ + 1;
   const int g0 = std::max(0, y0 - ri_), g1 = std::min(h, y1 + ri_);  // tensor rows needed
   int next_image_row = std::max(0, g0 - rd_);
   int next_out = y0;
@@ -95,19 +93,10 @@ float CornerResponseRows::process(ImageView<const std::uint8_t> image, bool harr
     // Output row y needs q rows clamp(y - ri .. y + ri): complete once g reaches min(h-1, y+ri),
     // and still in the ring (its last 2 ri + 1 rows).
     for (; next_out < y1 && std::min(h - 1, next_out + ri_) <= g; ++next_out) {
-      const float* txx[kMaxTaps];
-      const float* tyy[kMaxTaps];
-      const float* txy[kMaxTaps];
-      for (int j = 0; j < slots; ++j) {
-        const int y = std::clamp(next_out - (j - ri_), 0, h - 1);
-        txx[j] = ringRow(qxx_, slots, y);
-        tyy[j] = ringRow(qyy_, slots, y);
-        txy[j] = ringRow(qxy_, slots, y);
-      }
-      kern.convolve(txx, ki_.data(), slots, mxx_.data(), w_);
-      kern.convolve(tyy, ki_.data(), slots, myy_.data(), w_);
-      kern.convolve(txy, ki_.data(), slots, mxy_.data(), w_);
-      max_r = kern.response(mxx_.data(), mxy_.data(), myy_.data(), harris, k,
+      vertical(qxx_, ki_, next_out, h, mxx_.data());
+      vertical(qyy_, ki_, next_out, h, myy_.data());
+      vertical(qxy_, ki_, next_out, h, mxy_.data());
+      max_r = kern_.response(mxx_.data(), mxy_.data(), myy_.data(), harris, k,
                             resp.row(next_out), w_, max_r);
     }
   }

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/image.hpp"
+#include "simd/float_row_kernels.hpp"
 
 namespace svslam {
 
@@ -36,11 +37,15 @@ class CornerResponseRows {
   float* ringRow(std::vector<float>& ring, int slots, int y) {
     return ring.data() + static_cast<std::size_t>(y % slots) * stride_;
   }
+  // out = sum_j c[j] row(clamp(y - (j - r))) over the rows of `ring` (slots = 2 r + 1 rows,
+  // c of the same length), h the image height.
+  void vertical(std::vector<float>& ring, const std::vector<float>& c, int y, int h, float* out);
   void filterImageRow(const std::uint8_t* src, int y);  // hd(y), hg(y) into their rings
   void tensorRow(int g, int h);                         // q(g) from hd, hg rows around g
   // Horizontal ki pass of a padded product row (ri floats each side, filled here) into q.
   void integrateRow(std::vector<float>& padded, std::vector<float>& q_ring, int g);
 
+  const simd::FloatRowKernels& kern_;  // the fastest available row kernels
   int w_, rd_, ri_;
   std::size_t stride_;  // floats between ring rows: w rounded up, plus a cache line (no 4K alias)
   std::vector<float> kd_, kg_, ki_;
