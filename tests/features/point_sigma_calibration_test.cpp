@@ -37,12 +37,9 @@ Samples samplesOf(const std::string& sub) {
 }
 
 TEST(PointSigmaCalibration, LeaveOneSceneOutCoverageIsAbout68Percent) {
-  const std::vector<std::string> scenes = {"middlebury_v2/tsukuba", "middlebury_v2/venus",
-                                           "middlebury_v2/teddy",   "middlebury_v2/cones",
-                                           "middlebury2006_aloe"};
-  for (const auto& c : scenes)
-    if (!testing::dataPresent(c))
-      GTEST_SKIP() << "shared data absent: " << testing::dataDir() << "/" << c;
+  const std::vector<std::string>& scenes = testing::kSigmaScenes;
+  if (const std::string missing = testing::missingSigmaScene(); !missing.empty())
+    GTEST_SKIP() << "shared data absent: " << missing;
   std::vector<Samples> per_scene;
   for (const auto& c : scenes) per_scene.push_back(samplesOf(c));
   const std::vector<double> coverage = testing::heldOutCoverages(per_scene, 8);

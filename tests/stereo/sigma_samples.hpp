@@ -4,11 +4,25 @@
 #include <gtest/gtest.h>
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
+#include "real_data.hpp"
 #include "stereo/sigma_model.hpp"
 
 namespace svslam::testing {
+
+// The ground-truth scenes both calibrations are checked on (non-occluded masks).
+inline const std::vector<std::string> kSigmaScenes = {
+    "middlebury_v2/tsukuba", "middlebury_v2/venus", "middlebury_v2/teddy", "middlebury_v2/cones",
+    "middlebury2006_aloe"};
+
+// The first of kSigmaScenes absent from the shared data (as dataDir()/scene), "" if none is.
+inline std::string missingSigmaScene() {
+  for (const auto& c : kSigmaScenes)
+    if (!dataPresent(c)) return dataDir() + "/" + c;
+  return "";
+}
 
 struct SigmaSamples {
   std::vector<float> kappa;  // peak curvature of each sample
