@@ -55,6 +55,10 @@ Status readStereoMatch(ConfigReader& r, StereoMatchParams& m) {
   m.sigma_mode = sigma_mode == "fixed" ? StereoSigmaMode::kFixed : StereoSigmaMode::kCurvature;
   SVSLAM_TRY(r.read("stereo_match.sigma_d_px", m.sigma_d_px, 0.01, 10));
   SVSLAM_TRY(r.read("stereo_match.min_sigma_d_px", m.min_sigma_d_px, 0, 10));
+  std::string subpixel = m.subpixel == SubpixelMethod::kRefine ? "refine" : "parabola";
+  SVSLAM_TRY(r.read("stereo_match.subpixel", subpixel, {"parabola", "refine"}));
+  m.subpixel = subpixel == "refine" ? SubpixelMethod::kRefine : SubpixelMethod::kParabola;
+  SVSLAM_TRY(r.read("stereo_match.refine_iterations", m.refine.max_iterations, 1, 50));
   if (m.max_disp_px <= m.min_disp_px)
     return Status::invalidArgument(r.name() +
                                    ": key 'stereo_match.max_disp_px' must be > min_disp_px");
@@ -124,6 +128,7 @@ Status readSlam(ConfigReader& r, SlamSystemParams& p) {
   SVSLAM_TRY(r.read("slam.reperception_tolerance_px", p.reperception_tolerance_px, 0.01, 100));
   SVSLAM_TRY(r.read("slam.reperception_max_radius_px", p.reperception_max_radius_px, 0.01, 1000));
   SVSLAM_TRY(r.read("slam.reperception_min_zncc", p.reperception_min_zncc, -1, 1));
+  SVSLAM_TRY(r.read("slam.refine_observations", p.refine_observations));
   SVSLAM_TRY(r.read("slam.patch_half_px", p.patch_half_px, 1, 15));
   SVSLAM_TRY(r.read("slam.max_reperceptions", p.max_reperceptions, 0, 10000));
   SVSLAM_TRY(r.read("slam.max_observations", p.max_observations, 1, 10000));

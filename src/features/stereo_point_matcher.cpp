@@ -34,6 +34,9 @@ Status StereoMatchParams::validate() const {
     return Status::invalidArgument("stereo_match.sigma_mode must be curvature or fixed");
   if (Status s = sigma_model.validate(); !s)  // checked in either mode: a bad table is a bad config
     return Status::invalidArgument("stereo_match.sigma_model: " + s.message());
+  if (subpixel != SubpixelMethod::kParabola && subpixel != SubpixelMethod::kRefine)
+    return Status::invalidArgument("stereo_match.subpixel must be parabola or refine");
+  if (Status s = refine.validate(); !s) return Status::invalidArgument("stereo_match." + s.message());
   return Status::ok();
 }
 
@@ -58,8 +61,18 @@ float parabolaPeak(float sm, float s0, float sp) {
 
 }  // namespace
 
-void StereoPointMatcher::setPeak(int d, float sm, float s0, float sp, StereoMatch& m) const {
+void StereoPointMatcher::setPeak(ImageView<const std::uint8_t> left,
+                                 ImageView<const std::uint8_t> right, int x, int y, int d,
+                                 float sm, float s0, float sp, StereoMatch& m) {
   m.d_px = static_cast<float>(d) + parabolaPeak(sm, s0, sp);
+  m.refined = false;
+  double d_ref = 0.0, u_ref = 0.0;
+  if (params_.subpixel == SubpixelMethod::kRefine &&
+      refineDisparity(left, right, x, y, params_.patch_half_px, m.d_px, params_.refine, d_ref,
+                      u_ref)) {
+    m.d_px = static_cast<float>(d_ref);
+    m.refined = true;
+  }
   m.score = s0;
   m.curvature = std::max(0.0f, 2.0f * s0 - sm - sp);
   m.sigma_d_px = params_.sigma_mode == StereoSigmaMode::kFixed
@@ -109,7 +122,7 @@ bool StereoPointMatcher::searchRow(ImageView<const std::uint8_t> left,
   if (best == 0 || best == d1 - d0) return false;
   const float sm = scores_[static_cast<std::size_t>(best - 1)];
   const float sp = scores_[static_cast<std::size_t>(best + 1)];
-  setPeak(d0 + best, sm, sb, sp, m);
+  setPeak(left, right, x, y, d0 + best, sm, sb, sp, m);
   return true;
 }
 
@@ -173,7 +186,10 @@ Status StereoPointMatcher::process(ImageView<const std::uint8_t> left,
   if (params_.continuity_check) continuityCheck(out, rejected_);
   stats.continuity_rejected = static_cast<int>(rejected_.size());
   if (params_.recovery && !rejected_.empty()) recover(left, right, out, rejected_);
-  for (const StereoMatch& m : out) stats.recovered += m.recovered ? 1 : 0;
+  for (const StereoMatch& m : out) {
+    stats.recovered += m.recovered ? 1 : 0;
+    stats.refined += m.refined ? 1 : 0;
+  }
   std::sort(out.begin(), out.end(),
             [](const StereoMatch& a, const StereoMatch& b) { return a.index < b.index; });
   stats.matched = static_cast<int>(out.size());
@@ -257,7 +273,7 @@ void StereoPointMatcher::recover(ImageView<const std::uint8_t> left,
       const float sp = scores_[static_cast<std::size_t>(i + 1)];
       if (s0 < params_.min_zncc || s0 < sm || s0 < sp) continue;
       StereoMatch cand = r;
-      setPeak(d0 + i, sm, s0, sp, cand);
+      setPeak(left, right, x, y, d0 + i, sm, s0, sp, cand);
       const Eigen::Vector2d pb(r.u_px - cand.d_px, r.v_px);
       double cost = 0;
       for (int k = 0; k < 3; ++k) {

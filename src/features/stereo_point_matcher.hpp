@@ -9,7 +9,10 @@
 //    highest other local maximum of the score curve at |d - d_best| > 1 (the flanks of the best
 //    peak do not compete; the floor: on a repeated pattern both peaks are near 1 and their tiny
 //    dissimilarities would compare by sampling noise).
-//    Sub-pixel disparity by a parabola through the scores at d-1, d, d+1.
+//    Sub-pixel disparity by a parabola through the scores at d-1, d, d+1, then (subpixel =
+//    kRefine, the default) refined by Gauss-Newton on the patch with symmetric Lanczos
+//    resampling of both images (subpixel_refine.hpp), which removes the parabola's pull towards
+//    integer disparities; when the refinement does not converge the parabola value stays.
 // 2. Disparity continuity (seed 002 eq. 10): the 3 nearest accepted neighbours (left image) of
 //    each match must all satisfy |d_i - d_n| < continuity_threshold_px; otherwise rejected.
 // 3. Recovery (seed 002 eq. 11): the kept matches are Delaunay-triangulated in the left image;
@@ -36,6 +39,7 @@
 #include "core/status.hpp"
 #include "features/delaunay.hpp"
 #include "features/patch_similarity.hpp"
+#include "features/subpixel_refine.hpp"
 #include "stereo/sigma_model.hpp"
 
 namespace svslam {
@@ -43,6 +47,11 @@ namespace svslam {
 enum class StereoSigmaMode {
   kCurvature,  // sigma_d from the ZNCC peak curvature through sigma_model
   kFixed,      // sigma_d = sigma_d_px for every match (default)
+};
+
+enum class SubpixelMethod {
+  kParabola,  // parabola through the three scores around the integer peak
+  kRefine,    // the parabola, then Gauss-Newton refinement (refineDisparity)
 };
 
 struct StereoMatchParams {
@@ -63,6 +72,8 @@ struct StereoMatchParams {
   float sigma_d_px = 0.3f;      // kFixed: disparity standard deviation of every match, px, > 0
   float min_sigma_d_px = 0.0f;  // kCurvature: floor of the calibrated sigma_d, px, >= 0
   SigmaModel sigma_model = SigmaModel::defaultZnccPoints();  // kCurvature: kappa -> sigma_d
+  SubpixelMethod subpixel = SubpixelMethod::kRefine;
+  SubpixelRefineParams refine;  // kRefine
   Status validate() const;
 };
 
@@ -75,6 +86,7 @@ struct StereoMatch {
   float curvature = 0;  // kappa = 2 s(d) - s(d-1) - s(d+1) at the integer peak, 1/px^2, >= 0
   float score = 0;    // zncc at the integer peak
   bool recovered = false;  // rejected by the continuity check, then recovered
+  bool refined = false;    // d_px from the Gauss-Newton refinement (else the parabola)
 };
 
 struct StereoMatchStats {
@@ -83,6 +95,7 @@ struct StereoMatchStats {
   int continuity_rejected = 0;
   int recovered = 0;
   int matched = 0;            // in the output
+  int refined = 0;            // output matches with a refined disparity (kRefine)
 };
 
 class StereoPointMatcher {
@@ -113,8 +126,10 @@ class StereoPointMatcher {
   // (ps.x - d, y), d in [d0, d1]. Precondition: every right patch inside the image.
   void scanRow(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                const PatchStats& ps, int y, int d0, int d1);
-  // Sub-pixel disparity, curvature and sigma_d of `m` from the scores at d-1, d, d+1.
-  void setPeak(int d, float sm, float s0, float sp, StereoMatch& m) const;
+  // Sub-pixel disparity, curvature and sigma_d of `m` from the scores at d-1, d, d+1 at left
+  // pixel (x, y); with kRefine the disparity is then refined on the images.
+  void setPeak(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right, int x,
+               int y, int d, float sm, float s0, float sp, StereoMatch& m);
   void continuityCheck(std::vector<StereoMatch>& matches, std::vector<StereoMatch>& rejected);
   void recover(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                std::vector<StereoMatch>& kept, const std::vector<StereoMatch>& rejected);

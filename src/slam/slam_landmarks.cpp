@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "features/patch_similarity.hpp"
+#include "features/subpixel_refine.hpp"
 #include "slam/slam_system.hpp"
 #include "stereo/reprojection.hpp"
 
@@ -157,8 +158,16 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
       if (x < x0 || x > x1 || y < y0 || y > y1) return zncc(patch, ps, left, x, y);
       return scores_[static_cast<std::size_t>((y - y0) * w + (x - x0))];
     };
-    const float u = static_cast<float>(bx) + parabolaOffset(at(bx - 1, by), best, at(bx + 1, by));
-    const float v = static_cast<float>(by) + parabolaOffset(at(bx, by - 1), best, at(bx, by + 1));
+    float u = static_cast<float>(bx) + parabolaOffset(at(bx - 1, by), best, at(bx + 1, by));
+    float v = static_cast<float>(by) + parabolaOffset(at(bx, by - 1), best, at(bx, by + 1));
+    // Gauss-Newton refinement of the template's position (no pull towards integer pixels);
+    // the parabola stays when it does not converge.
+    double u_ref = 0.0, v_ref = 0.0;
+    if (params_.refine_observations &&
+        refineTranslation(tmpl_.data(), h, left, u, v, refine_, u_ref, v_ref)) {
+      u = static_cast<float>(u_ref);
+      v = static_cast<float>(v_ref);
+    }
     // Right image: along the row around the predicted disparity.
     const double dr = 3.0 * pr.sigma_d + 3.0;
     StereoMatch sm;

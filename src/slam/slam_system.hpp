@@ -19,7 +19,9 @@
 //     after a loop) the 1 px error and reperception_tolerance_px (seed 001 sec 4.1), at most
 //     max_reperceptions per frame, the best predicted first, searched first; then the tracked
 //     landmarks, oldest first, up to max_observations per frame (bounded update cost). The
-//     patch is warped to the predicted view (LandmarkManager::templateFor). Chi-square gating;
+//     patch is warped to the predicted view (LandmarkManager::templateFor); the ZNCC peak is
+//     refined to sub-pixel by Gauss-Newton on that template (refine_observations) and the
+//     disparity by the stereo matcher's refinement. Chi-square gating;
 //  4. landmark selection: about candidate_fraction of the new matches (points matched for the
 //     first time) become candidates, the most precise first, in grid cells holding fewer than
 //     max_per_cell landmarks and candidates (spread over the image); a candidate tracked over
@@ -44,6 +46,7 @@
 #include "core/image.hpp"
 #include "core/stage_observer.hpp"
 #include "core/status.hpp"
+#include "features/subpixel_refine.hpp"
 #include "odometry/stereo_odometry.hpp"
 #include "slam/ekf_slam.hpp"
 #include "slam/landmark_manager.hpp"
@@ -68,6 +71,9 @@ struct SlamSystemParams {
   double landmark_exclusion_px = 2.0;       // see step 2, px, >= 0
   double reperception_max_radius_px = 60.0;  // cap of the search radius, px
   float reperception_min_zncc = 0.8f;
+  bool refine_observations = true;     // refine a tracked landmark's ZNCC position by
+                                       // Gauss-Newton (subpixel_refine.hpp) instead of keeping
+                                       // the parabola through the scores
   int patch_half_px = 5;               // appearance patch stored per landmark, 1..15
   int retire_unseen_frames = 2;        // a landmark unseen for fewer frames is never retired
   double lost_rot_sigma_rad = 0.035;   // prediction covariance when the VME fails
@@ -155,6 +161,7 @@ class SlamSystem {
   std::vector<SearchPrediction> preds_;  // landmarks predicted in the image, this frame
   std::vector<int> fresh_;               // points matched for the first time, this frame
   std::vector<std::uint8_t> tmpl_;  // warped landmark template
+  SubpixelRefineParams refine_;     // observation refinement (defaults)
   std::vector<int> cell_count_;
   int frame_ = 0;
 };
