@@ -66,10 +66,9 @@ void StereoPointMatcher::setPeak(ImageView<const std::uint8_t> left,
                                  float sm, float s0, float sp, StereoMatch& m) {
   m.d_px = static_cast<float>(d) + parabolaPeak(sm, s0, sp);
   m.refined = false;
-  double d_ref = 0.0, u_ref = 0.0;
+  double d_ref = 0.0;
   if (params_.subpixel == SubpixelMethod::kRefine &&
-      refineDisparity(left, right, x, y, params_.patch_half_px, m.d_px, params_.refine, d_ref,
-                      u_ref)) {
+      refineDisparity(left, right, x, y, params_.patch_half_px, m.d_px, params_.refine, d_ref)) {
     m.d_px = static_cast<float>(d_ref);
     m.refined = true;
   }

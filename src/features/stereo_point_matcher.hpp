@@ -10,8 +10,8 @@
 //    peak do not compete; the floor: on a repeated pattern both peaks are near 1 and their tiny
 //    dissimilarities would compare by sampling noise).
 //    Sub-pixel disparity by a parabola through the scores at d-1, d, d+1, then (subpixel =
-//    kRefine, the default) refined by Gauss-Newton on the patch with symmetric Lanczos
-//    resampling of both images (subpixel_refine.hpp), which removes the parabola's pull towards
+//    kRefine, the default) refined by Gauss-Newton of the right image's Lanczos-resampled patch
+//    against the left one (subpixel_refine.hpp), which removes the parabola's pull towards
 //    integer disparities; when the refinement does not converge the parabola value stays.
 // 2. Disparity continuity (seed 002 eq. 10): the 3 nearest accepted neighbours (left image) of
 //    each match must all satisfy |d_i - d_n| < continuity_threshold_px; otherwise rejected.

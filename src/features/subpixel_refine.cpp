@@ -1,7 +1,5 @@
 #include "features/subpixel_refine.hpp"
 
-#include <Eigen/Cholesky>
-#include <Eigen/Core>
 #include <array>
 #include <cmath>
 
@@ -19,8 +17,8 @@ Status SubpixelRefineParams::validate() const {
 
 namespace {
 
-constexpr int kMaxHalf = 15;                 // patch half sizes up to 15 (side 31)
-constexpr int kMaxSide = 2 * kMaxHalf + 3;   // samples with the one-pixel gradient border
+constexpr int kMaxHalf = 15;                // patch half sizes up to 15 (side 31)
+constexpr int kMaxSide = 2 * kMaxHalf + 1;
 
 // Interpolation kernel: Lanczos-4, w_m(t) = sinc(m - t) sinc((m - t) / 4) for the eight taps
 // m = -3 .. 4 around a fraction t in [0, 1), plus the correction l0 + l1 (m - t) that makes the
@@ -30,18 +28,30 @@ constexpr int kMaxSide = 2 * kMaxHalf + 3;   // samples with the one-pixel gradi
 // interpolation shift by 0.03 px too little at 1.3 rad/px (t = 0.25), which biased the refined
 // shift by 20 % of its fraction on the synthetic texture.
 constexpr int kTapsBefore = 3, kTapsAfter = 4, kTaps = kTapsBefore + kTapsAfter + 1;
-void lanczosWeights(double t, double w[kTaps]) {
+void lanczosWeights(double t, float w_out[kTaps]) {
   constexpr double kPi = 3.14159265358979323846;
   constexpr double kA = kTapsAfter;
+  // sin(pi (m - t)) = (-1)^(m+1) sin(pi t), and sin(pi (m - t) / 4) by the angle difference
+  // from sin, cos of pi m / 4 and of pi t / 4: three libm calls per weight set.
+  const double st = std::sin(kPi * t);
+  const double s4 = std::sin(kPi * t / kA), c4 = std::cos(kPi * t / kA);
+  static constexpr double kSinM[kTaps] = {-0.70710678118654752, -1.0, -0.70710678118654752, 0.0,
+                                          0.70710678118654752,  1.0,  0.70710678118654752,  0.0};
+  static constexpr double kCosM[kTaps] = {-0.70710678118654752, 0.0, 0.70710678118654752, 1.0,
+                                          0.70710678118654752,  0.0, -0.70710678118654752, -1.0};
+  double w[kTaps];
   double s0 = 0.0, s1 = 0.0, sx = 0.0, sxx = 0.0;
   for (int m = -kTapsBefore; m <= kTapsAfter; ++m) {
+    const int k = m + kTapsBefore;
     const double x = m - t;
     double v = 1.0;
-    if (std::abs(x) > 1e-12) {
+    if (std::abs(x) > 1e-9) {
+      const double sin_px = (m % 2 == 0 ? -st : st);              // sin(pi (m - t))
+      const double sin_px4 = kSinM[k] * c4 - kCosM[k] * s4;       // sin(pi (m - t) / 4)
       const double px = kPi * x;
-      v = kA * std::sin(px) * std::sin(px / kA) / (px * px);
+      v = kA * sin_px * sin_px4 / (px * px);
     }
-    w[m + kTapsBefore] = v;
+    w[k] = v;
     s0 += v;
     s1 += v * x;
     sx += x;
@@ -51,17 +61,19 @@ void lanczosWeights(double t, double w[kTaps]) {
   const double det = kTaps * sxx - sx * sx;
   const double l0 = ((1.0 - s0) * sxx + sx * s1) / det;
   const double l1 = (-kTaps * s1 - sx * (1.0 - s0)) / det;
-  for (int m = -kTapsBefore; m <= kTapsAfter; ++m) w[m + kTapsBefore] += l0 + l1 * (m - t);
+  for (int m = -kTapsBefore; m <= kTapsAfter; ++m)
+    w_out[m + kTapsBefore] = static_cast<float>(w[m + kTapsBefore] + l0 + l1 * (m - t));
 }
 
 // Samples s[k] = row(x_first + k + alpha), k in [0, n), with the weights of lanczosWeights(alpha),
 // x_first an integer. Precondition: pixels x_first - 3 .. x_first + n + 3 are inside the row.
-void sampleRow(const std::uint8_t* row, int x_first, const double w[kTaps], int n, double* s) {
-  for (int k = 0; k < n; ++k) {
-    const std::uint8_t* p = row + x_first + k - kTapsBefore;
-    double v = 0.0;
-    for (int m = 0; m < kTaps; ++m) v += w[m] * p[m];
-    s[k] = v;
+// The loop over k is the inner one so it vectorises.
+void sampleRow(const std::uint8_t* row, int x_first, const float w[kTaps], int n, float* s) {
+  const std::uint8_t* p = row + x_first - kTapsBefore;
+  for (int k = 0; k < n; ++k) s[k] = w[0] * static_cast<float>(p[k]);
+  for (int m = 1; m < kTaps; ++m) {
+    const float wm = w[m];
+    for (int k = 0; k < n; ++k) s[k] += wm * static_cast<float>(p[k + m]);
   }
 }
 
@@ -72,57 +84,75 @@ void splitPosition(double p, int& i, double& frac) {
   frac = p - f;
 }
 
+// Zero-mean, unit-norm copy of v[0 .. n): out = (v - mean) / norm; returns norm (0 when flat).
+float normalise(const float* v, int n, float* out) {
+  double sum = 0.0, sum_sq = 0.0;
+  for (int k = 0; k < n; ++k) {
+    sum += v[k];
+    sum_sq += static_cast<double>(v[k]) * v[k];
+  }
+  const double mean = sum / n;
+  const double var = sum_sq - sum * mean;
+  if (!(var > 1e-6)) return 0.0f;
+  const float inv = static_cast<float>(1.0 / std::sqrt(var));
+  const float m = static_cast<float>(mean);
+  for (int k = 0; k < n; ++k) out[k] = (v[k] - m) * inv;
+  return static_cast<float>(std::sqrt(var));
+}
+
 }  // namespace
 
 bool refineDisparity(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                      int x, int y, int h, double d_start, const SubpixelRefineParams& params,
-                     double& d_px, double& u_px) {
+                     double& d_px) {
   if (!std::isfinite(d_start) || std::abs(d_start) > 1e6) return false;
-  const int d0 = static_cast<int>(std::lround(d_start));  // integer anchor of the sampling
-  if (h < 1 || h > kMaxHalf || y - h < 0 || y + h >= left.height || left.height != right.height)
+  if (h < 1 || h > kMaxHalf || y - h < 0 || y + h >= left.height || left.height != right.height ||
+      x - h - 2 < 0 || x + h + 2 >= left.width)
     return false;
-  const int n = 2 * h + 3;  // samples at offsets -h-1 .. h+1
-  std::array<double, kMaxSide> sl{}, sr{};
-  double e = d_start - d0, a = 1.0, b = 0.0;
-  for (int it = 0; it < params.max_iterations; ++it) {
-    // Left samples at x + i + e/2, right samples at x - d0 + i - e/2, i in [-h-1, h+1].
-    int il, ir;
-    double al, ar;
-    splitPosition(x - h - 1 + 0.5 * e, il, al);
-    splitPosition(x - d0 - h - 1 - 0.5 * e, ir, ar);
-    if (il < kTapsBefore || ir < kTapsBefore || il + n + kTapsAfter > left.width ||
-        ir + n + kTapsAfter > right.width)
-      return false;
-    double wl[kTaps], wr[kTaps];
-    lanczosWeights(al, wl);
-    lanczosWeights(ar, wr);
-    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d g = Eigen::Vector3d::Zero();
-    for (int j = -h; j <= h; ++j) {
-      sampleRow(left.row(y + j), il, wl, n, sl.data());
-      sampleRow(right.row(y + j), ir, wr, n, sr.data());
-      for (int k = 1; k <= n - 2; ++k) {
-        const double lx = 0.5 * (sl[k + 1] - sl[k - 1]);
-        const double rx = 0.5 * (sr[k + 1] - sr[k - 1]);
-        const double r = a * sl[k] + b - sr[k];
-        const Eigen::Vector3d J(0.5 * (a * lx + rx), sl[k], 1.0);
-        H.noalias() += J * J.transpose();
-        g.noalias() += J * r;
-      }
+  const int side = 2 * h + 1, count = side * side;
+  // Template: the left patch, normalised, and its x gradient (5-tap derivative, accurate to
+  // 2 rad/px within 10 %).
+  std::array<float, kMaxSide * kMaxSide> t, gt, smp, smp_n;  // only [0, count) is used
+  for (int j = 0; j < side; ++j) {
+    const std::uint8_t* row = left.row(y - h + j) + x - h;
+    for (int i = 0; i < side; ++i) {
+      t[static_cast<std::size_t>(j * side + i)] = row[i];
+      gt[static_cast<std::size_t>(j * side + i)] =
+          (static_cast<float>(row[i - 2]) - 8.0f * row[i - 1] + 8.0f * row[i + 1] - row[i + 2]) *
+          (1.0f / 12.0f);
     }
-    const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
-    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-9)) return false;
-    const Eigen::Vector3d dp = -ldlt.solve(g);
-    if (!dp.allFinite()) return false;
-    e += dp(0);
-    a += dp(1);
-    b += dp(2);
-    if (!(std::abs(d0 + e - d_start) <= params.max_shift_px) || !(std::abs(e) <= 2.0) ||
-        !(a > 0.0))
-      return false;
-    if (std::abs(dp(0)) < params.stop_px) {
-      d_px = d0 + e;
-      u_px = x + 0.5 * e;
+  }
+  const float t_norm = normalise(t.data(), count, t.data());
+  if (t_norm == 0.0f) return false;
+  double hess = 0.0;
+  for (int k = 0; k < count; ++k) {
+    gt[static_cast<std::size_t>(k)] /= t_norm;
+    hess += static_cast<double>(gt[static_cast<std::size_t>(k)]) * gt[static_cast<std::size_t>(k)];
+  }
+  if (!(hess > 1e-9)) return false;
+  double d = d_start;
+  for (int it = 0; it < params.max_iterations; ++it) {
+    // Right samples at x + i - d, i in [-h, h].
+    int ir;
+    double ar;
+    splitPosition(x - h - d, ir, ar);
+    if (ir < kTapsBefore || ir + side + kTapsAfter > right.width) return false;
+    float w[kTaps];
+    lanczosWeights(ar, w);
+    for (int j = 0; j < side; ++j)
+      sampleRow(right.row(y - h + j), ir, w, side, &smp[static_cast<std::size_t>(j * side)]);
+    if (normalise(smp.data(), count, smp_n.data()) == 0.0f) return false;
+    // R(x + i - d - delta) ~ R(x + i - d) - R_x delta, R_x ~ L_x at the solution, so
+    // delta = -sum g (T - R) / sum g^2.
+    double num = 0.0;
+    for (int k = 0; k < count; ++k)
+      num += static_cast<double>(gt[static_cast<std::size_t>(k)]) *
+             (t[static_cast<std::size_t>(k)] - smp_n[static_cast<std::size_t>(k)]);
+    const double delta = -num / hess;
+    d += delta;
+    if (!(std::abs(d - d_start) <= params.max_shift_px)) return false;
+    if (std::abs(delta) < params.stop_px) {
+      d_px = d;
       return true;
     }
   }
@@ -132,60 +162,74 @@ bool refineDisparity(ImageView<const std::uint8_t> left, ImageView<const std::ui
 bool refineTranslation(const std::uint8_t* tmpl, int h, ImageView<const std::uint8_t> image,
                        double u_start, double v_start, const SubpixelRefineParams& params,
                        double& u_px, double& v_px) {
-  if (h < 1 || h > kMaxHalf || !std::isfinite(u_start) || !std::isfinite(v_start) ||
+  if (h < 2 || h > kMaxHalf || !std::isfinite(u_start) || !std::isfinite(v_start) ||
       std::abs(u_start) > 1e6 || std::abs(v_start) > 1e6)
     return false;
   const int side = 2 * h + 1;
-  const int n = 2 * h + 3;  // samples at offsets -h-1 .. h+1 in x and y
-  std::array<double, kMaxSide * kMaxSide> s{};
-  std::array<double, (kMaxSide + kTaps - 1) * kMaxSide> hs{};  // rows resampled in x
-  double u = u_start, v = v_start, a = 1.0, b = 0.0;
+  // The template's interior (offsets -(h-1) .. h-1), where central differences exist.
+  const int hi = h - 1, si = 2 * hi + 1, count = si * si;
+  std::array<float, kMaxSide * kMaxSide> t, gx, gy, smp, smp_n;  // only [0, count) is used
+  std::array<float, (kMaxSide + kTaps - 1) * kMaxSide> hs;  // rows resampled in x
+  for (int j = 0; j < si; ++j)
+    for (int i = 0; i < si; ++i) {
+      const std::uint8_t* c = tmpl + (j + 1) * side + (i + 1);
+      const std::size_t k = static_cast<std::size_t>(j * si + i);
+      t[k] = c[0];
+      gx[k] = 0.5f * (static_cast<float>(c[1]) - c[-1]);
+      gy[k] = 0.5f * (static_cast<float>(c[side]) - c[-side]);
+    }
+  const float t_norm = normalise(t.data(), count, t.data());
+  if (t_norm == 0.0f) return false;
+  double hxx = 0.0, hxy = 0.0, hyy = 0.0;
+  for (int k = 0; k < count; ++k) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    gx[kk] /= t_norm;
+    gy[kk] /= t_norm;
+    hxx += static_cast<double>(gx[kk]) * gx[kk];
+    hxy += static_cast<double>(gx[kk]) * gy[kk];
+    hyy += static_cast<double>(gy[kk]) * gy[kk];
+  }
+  const double det = hxx * hyy - hxy * hxy;
+  if (!(det > 1e-12 * (hxx + hyy) * (hxx + hyy)) || !(det > 1e-18)) return false;
+  double u = u_start, v = v_start;
   for (int it = 0; it < params.max_iterations; ++it) {
     int ix, iy;
     double ax, ay;
-    splitPosition(u - h - 1, ix, ax);
-    splitPosition(v - h - 1, iy, ay);
-    if (ix < kTapsBefore || iy < kTapsBefore || ix + n + kTapsAfter > image.width ||
-        iy + n + kTapsAfter > image.height)
+    splitPosition(u - hi, ix, ax);
+    splitPosition(v - hi, iy, ay);
+    if (ix < kTapsBefore || iy < kTapsBefore || ix + si + kTapsAfter > image.width ||
+        iy + si + kTapsAfter > image.height)
       return false;
-    // Samples of the image on the (2h + 3)^2 grid at (u + i, v + j): each row resampled in x,
-    // then the columns in y (separable Lanczos-4).
-    double wx[kTaps], wy[kTaps];
+    // Samples of the image at (u + i, v + j): each row resampled in x, then the columns in y
+    // (separable Lanczos-4).
+    float wx[kTaps], wy[kTaps];
     lanczosWeights(ax, wx);
     lanczosWeights(ay, wy);
-    for (int r = 0; r < n + kTaps - 1; ++r)
-      sampleRow(image.row(iy - kTapsBefore + r), ix, wx, n, &hs[r * n]);
-    for (int r = 0; r < n; ++r)
-      for (int k = 0; k < n; ++k) {
-        double v = 0.0;
-        for (int m = 0; m < kTaps; ++m) v += wy[m] * hs[(r + m) * n + k];
-        s[r * n + k] = v;
-      }
-    Eigen::Matrix4d H = Eigen::Matrix4d::Zero();
-    Eigen::Vector4d g = Eigen::Vector4d::Zero();
-    for (int j = 0; j < side; ++j)
-      for (int i = 0; i < side; ++i) {
-        const double* c = &s[(j + 1) * n + (i + 1)];
-        const double gx = 0.5 * (c[1] - c[-1]);
-        const double gy = 0.5 * (c[n] - c[-n]);
-        const double t = tmpl[j * side + i];
-        const double r = a * t + b - c[0];
-        const Eigen::Vector4d J(-gx, -gy, t, 1.0);
-        H.noalias() += J * J.transpose();
-        g.noalias() += J * r;
-      }
-    const Eigen::LDLT<Eigen::Matrix4d> ldlt(H);
-    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-9)) return false;
-    const Eigen::Vector4d dp = -ldlt.solve(g);
-    if (!dp.allFinite()) return false;
-    u += dp(0);
-    v += dp(1);
-    a += dp(2);
-    b += dp(3);
+    for (int r = 0; r < si + kTaps - 1; ++r)
+      sampleRow(image.row(iy - kTapsBefore + r), ix, wx, si, &hs[static_cast<std::size_t>(r * si)]);
+    for (int r = 0; r < si; ++r) {
+      float* out = &smp[static_cast<std::size_t>(r * si)];
+      const float* in = &hs[static_cast<std::size_t>(r * si)];
+      for (int k = 0; k < si; ++k) out[k] = wy[0] * in[k];
+      for (int m = 1; m < kTaps; ++m)
+        for (int k = 0; k < si; ++k) out[k] += wy[m] * in[m * si + k];
+    }
+    if (normalise(smp.data(), count, smp_n.data()) == 0.0f) return false;
+    // I(u + delta) ~ I(u) + grad T . delta, so delta = H^-1 sum grad T (T - I).
+    double bx = 0.0, by = 0.0;
+    for (int k = 0; k < count; ++k) {
+      const std::size_t kk = static_cast<std::size_t>(k);
+      const double r = static_cast<double>(t[kk]) - smp_n[kk];
+      bx += gx[kk] * r;
+      by += gy[kk] * r;
+    }
+    const double du = (hyy * bx - hxy * by) / det, dv = (hxx * by - hxy * bx) / det;
+    u += du;
+    v += dv;
     if (!(std::abs(u - u_start) <= params.max_shift_px) ||
-        !(std::abs(v - v_start) <= params.max_shift_px) || !(a > 0.0))
+        !(std::abs(v - v_start) <= params.max_shift_px))
       return false;
-    if (std::abs(dp(0)) < params.stop_px && std::abs(dp(1)) < params.stop_px) {
+    if (std::abs(du) < params.stop_px && std::abs(dv) < params.stop_px) {
       u_px = u;
       v_px = v;
       return true;
