@@ -1,5 +1,6 @@
 // ORB extractor against independent references: cv::FAST for the segment test and score, known
-// image transforms (cv::warpAffine, cv::resize) for orientation, descriptors and scale.
+// image transforms (cv::warpAffine) for orientation; keypoint bookkeeping, determinism, bad input.
+// Descriptor and scale tests: orb_descriptor_test.cpp.
 #include "features/orb_extractor.hpp"
 
 #include <gtest/gtest.h>
@@ -18,109 +19,12 @@
 #include <utility>
 
 #include "features/fast_detector.hpp"
+#include "orb_test_support.hpp"
 
 namespace svslam {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
-// Seeded texture: random filled rectangles, ellipses and triangles of random grey levels and
-// sizes (4..80 px, log-uniform) on a smooth gradient, then a light blur and +-3 grey noise.
-cv::Mat texture(int w, int h, std::uint64_t seed, int shapes = -1) {
-  cv::RNG rng(seed);
-  cv::Mat img(h, w, CV_8U);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      img.at<std::uint8_t>(y, x) =
-          cv::saturate_cast<std::uint8_t>(90 + 40.0 * x / w + 30.0 * y / h);
-  if (shapes < 0) shapes = w * h / 400;
-  for (int i = 0; i < shapes; ++i) {
-    const double size = std::exp(rng.uniform(std::log(4.0), std::log(80.0)));
-    const cv::Point c(rng.uniform(0, w), rng.uniform(0, h));
-    const cv::Scalar grey(rng.uniform(0, 256));
-    switch (rng.uniform(0, 3)) {
-      case 0:
-        cv::rectangle(img,
-                      cv::Rect(c.x, c.y, static_cast<int>(size),
-                               static_cast<int>(size * rng.uniform(0.4, 1.6))),
-                      grey, cv::FILLED);
-        break;
-      case 1:
-        cv::ellipse(img, c,
-                    cv::Size(static_cast<int>(size / 2) + 1, static_cast<int>(size / 3) + 1),
-                    rng.uniform(0.0, 180.0), 0, 360, grey, cv::FILLED, cv::LINE_AA);
-        break;
-      default: {
-        std::vector<cv::Point> tri;
-        for (int k = 0; k < 3; ++k)
-          tri.emplace_back(c.x + static_cast<int>(rng.uniform(-size, size)),
-                           c.y + static_cast<int>(rng.uniform(-size, size)));
-        cv::fillConvexPoly(img, tri, grey, cv::LINE_AA);
-      }
-    }
-  }
-  cv::GaussianBlur(img, img, cv::Size(0, 0), 0.8);
-  cv::Mat noise(h, w, CV_16S);
-  rng.fill(noise, cv::RNG::UNIFORM, -3, 4);
-  cv::Mat out;
-  img.convertTo(img, CV_16S);
-  cv::add(img, noise, img);
-  img.convertTo(out, CV_8U);
-  return out;
-}
-
-ImageU8 toImage(const cv::Mat& m) {
-  ImageU8 img(m.cols, m.rows);
-  for (int y = 0; y < m.rows; ++y)
-    for (int x = 0; x < m.cols; ++x) img(x, y) = m.at<std::uint8_t>(y, x);
-  return img;
-}
-
-struct Features {
-  std::vector<OrbKeypoint> kp;
-  std::vector<OrbDescriptor> desc;
-};
-
-Features extract(const cv::Mat& m, const OrbParams& p = {}) {
-  OrbExtractor ex(p, m.cols, m.rows);
-  EXPECT_TRUE(ex.initStatus().isOk()) << ex.initStatus().message();
-  Features f;
-  const ImageU8 img = toImage(m);
-  const Status s = ex.process(img.cview(), f.kp, f.desc);
-  EXPECT_TRUE(s.isOk()) << s.message();
-  return f;
-}
-
-// Brute-force Hamming nearest neighbour from a to b with Lowe's ratio test.
-std::vector<std::pair<int, int>> matchRatio(const Features& a, const Features& b, double ratio) {
-  std::vector<std::pair<int, int>> out;
-  for (std::size_t i = 0; i < a.desc.size(); ++i) {
-    int best = 1000, second = 1000, best_j = -1;
-    for (std::size_t j = 0; j < b.desc.size(); ++j) {
-      const int d = hammingDistance(a.desc[i], b.desc[j]);
-      if (d < best) {
-        second = best;
-        best = d;
-        best_j = static_cast<int>(j);
-      } else if (d < second) {
-        second = d;
-      }
-    }
-    if (best_j >= 0 && best < ratio * second) out.emplace_back(static_cast<int>(i), best_j);
-  }
-  return out;
-}
-
-cv::Point2d apply(const cv::Mat& m, double x, double y) {
-  return {m.at<double>(0, 0) * x + m.at<double>(0, 1) * y + m.at<double>(0, 2),
-          m.at<double>(1, 0) * x + m.at<double>(1, 1) * y + m.at<double>(1, 2)};
-}
-
-double wrapDeg(double a) {
-  while (a > 180) a -= 360;
-  while (a <= -180) a += 360;
-  return a;
-}
+using namespace orb_test;  // NOLINT: the shared fixtures
 
 // ---- FAST against OpenCV -------------------------------------------------------------------
 
@@ -286,111 +190,6 @@ TEST(OrbOrientation, FollowsImageRotation) {
     EXPECT_GT(within(15), 0.9) << deg;
   }
 }
-
-// ---- descriptor matching --------------------------------------------------------------------
-
-struct MatchStats {
-  int matches = 0, correct = 0;
-  std::vector<double> scale_ratio;  // scale_a / scale_b of the correct matches
-};
-
-// Matches a -> b (ratio test 0.8) and checks each against M (a's level-0 px -> b's), counting
-// only a-keypoints that land inside b at least 20 px from its border.
-MatchStats matchUnder(const cv::Mat& a, const cv::Mat& b, const cv::Mat& M) {
-  OrbParams p;
-  const Features fa = extract(a, p), fb = extract(b, p);
-  MatchStats st;
-  for (const auto& [i, j] : matchRatio(fa, fb, 0.8)) {
-    const auto& ka = fa.kp[static_cast<std::size_t>(i)];
-    const auto& kb = fb.kp[static_cast<std::size_t>(j)];
-    const cv::Point2d pb = apply(M, ka.x_px, ka.y_px);
-    if (pb.x < 20 || pb.y < 20 || pb.x > b.cols - 21 || pb.y > b.rows - 21) continue;
-    ++st.matches;
-    if (std::hypot(kb.x_px - pb.x, kb.y_px - pb.y) <= 2.0) {
-      ++st.correct;
-      st.scale_ratio.push_back(ka.scale / kb.scale);
-    }
-  }
-  return st;
-}
-
-TEST(OrbDescriptor, MatchesUnderRotationAndScale) {
-  const cv::Mat a = texture(640, 480, 21);
-  const cv::Mat M = cv::getRotationMatrix2D(cv::Point2f(319.5f, 239.5f), 30.0, 0.75);
-  cv::Mat b;
-  cv::warpAffine(a, b, M, a.size(), cv::INTER_AREA, cv::BORDER_CONSTANT, cv::Scalar(0));
-  const MatchStats st = matchUnder(a, b, M);
-  std::printf(
-      "[descriptor] rotation 30 deg, scale 0.75: %d of %d ratio-test matches correct (%.1f%%)\n",
-      st.correct, st.matches, 100.0 * st.correct / std::max(1, st.matches));
-  EXPECT_GT(st.matches, 100);
-  EXPECT_GE(st.correct, 0.7 * st.matches);
-}
-
-TEST(OrbDescriptor, MatchesTsukubaRotated) {
-  const std::string path = std::string(SVSLAM_DATA_DIR) + "/middlebury_v2/tsukuba/imL.png";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "no " << path;
-  const cv::Mat a = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  ASSERT_FALSE(a.empty());
-  const cv::Mat M =
-      cv::getRotationMatrix2D(cv::Point2f(a.cols / 2.0f - 0.5f, a.rows / 2.0f - 0.5f), 30.0, 0.75);
-  cv::Mat b;
-  cv::warpAffine(a, b, M, a.size(), cv::INTER_AREA, cv::BORDER_CONSTANT, cv::Scalar(0));
-  const MatchStats st = matchUnder(a, b, M);
-  std::printf("[descriptor] tsukuba, rotation 30 deg, scale 0.75: %d of %d correct (%.1f%%)\n",
-              st.correct, st.matches, 100.0 * st.correct / std::max(1, st.matches));
-  EXPECT_GT(st.matches, 30);
-  EXPECT_GE(st.correct, 0.7 * st.matches);
-}
-
-TEST(OrbScale, HalvedImageHasHalfTheScale) {
-  const cv::Mat a = texture(800, 600, 5);
-  cv::Mat b;
-  cv::resize(a, b, cv::Size(400, 300), 0, 0, cv::INTER_AREA);
-  // Level-0 pixel centres: x_b = (x_a + 0.5) / 2 - 0.5.
-  cv::Mat M = (cv::Mat_<double>(2, 3) << 0.5, 0, -0.25, 0, 0.5, -0.25);
-  MatchStats st = matchUnder(a, b, M);
-  ASSERT_GT(st.correct, 50);
-  std::sort(st.scale_ratio.begin(), st.scale_ratio.end());
-  const double median = st.scale_ratio[st.scale_ratio.size() / 2];
-  const double q1 = st.scale_ratio[st.scale_ratio.size() / 4];
-  const double q3 = st.scale_ratio[st.scale_ratio.size() * 3 / 4];
-  std::printf(
-      "[scale] 0.5x: %d correct matches of %d, scale ratio median %.3f (quartiles %.3f, "
-      "%.3f)\n",
-      st.correct, st.matches, median, q1, q3);
-  EXPECT_NEAR(median, 2.0, 0.15);
-  EXPECT_GT(q1, 1.6);
-  EXPECT_LT(q3, 2.5);
-}
-
-TEST(OrbDescriptor, HammingDistanceCountsBits) {
-  OrbDescriptor a, b;
-  EXPECT_EQ(hammingDistance(a, b), 0);
-  b.words = {~0ULL, 0, 1, 0x8000000000000001ULL};
-  EXPECT_EQ(hammingDistance(a, b), 64 + 1 + 2);
-  EXPECT_EQ(hammingDistance(b, b), 0);
-  a.words = {~0ULL, ~0ULL, ~0ULL, ~0ULL};
-  EXPECT_EQ(hammingDistance(a, OrbDescriptor{}), 256);
-}
-
-TEST(OrbDescriptor, PatternInsidePatchAndSeeded) {
-  OrbExtractor ex(OrbParams{}, 64, 64);
-  ASSERT_TRUE(ex.initStatus().isOk());
-  ASSERT_EQ(ex.pattern().size(), 256u);
-  for (const auto& p : ex.pattern()) {
-    EXPECT_LE(p[0] * p[0] + p[1] * p[1], 15 * 15);
-    EXPECT_LE(p[2] * p[2] + p[3] * p[3], 15 * 15);
-    EXPECT_FALSE(p[0] == p[2] && p[1] == p[3]);
-  }
-  OrbParams other;
-  other.pattern_seed = 99;
-  OrbExtractor ex2(other, 64, 64);
-  EXPECT_NE(ex.pattern(), ex2.pattern());
-  EXPECT_EQ(ex.pattern(), OrbExtractor(OrbParams{}, 80, 70).pattern());
-}
-
-// ---- extractor behaviour --------------------------------------------------------------------
 
 TEST(OrbExtractor, KeypointsAreConsistentAndBucketed) {
   const cv::Mat m = texture(480, 320, 9);
