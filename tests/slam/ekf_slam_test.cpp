@@ -1,7 +1,7 @@
-// EKF SLAM core (seed 001 sec. 4): analytic Jacobians against numerical differentiation, exact
-// composition of noise-free predictions, the sparse update against a dense textbook reference,
-// Monte Carlo NEES consistency, gating of a planted outlier, positive definiteness over many
-// updates, landmark removal, the loop behaviour and bad-argument rejection.
+// EKF SLAM core (seed 001 sec. 4): exact composition of noise-free predictions, the sparse update
+// against a dense textbook reference, gating of a planted outlier, positive definiteness over
+// many updates, landmark removal, the loop behaviour and bad-argument rejection. Jacobians:
+// pose_jacobians_test.cpp; Monte Carlo consistency: ekf_slam_consistency_test.cpp.
 #include "slam/ekf_slam.hpp"
 
 #include <gtest/gtest.h>
@@ -14,106 +14,20 @@
 #include <limits>
 #include <random>
 
+#include "ekf_test_support.hpp"
 #include "motion/visual_motion.hpp"
+#include "slam/ekf_slam.hpp"
 #include "slam/pose_jacobians.hpp"
 #include "stereo/reprojection.hpp"
 
 namespace svslam {
 namespace {
 
+using namespace ekf_test;  // NOLINT: the shared fixtures
 using Eigen::Isometry3d;
 using Eigen::Matrix3d;
 using Eigen::MatrixXd;
 using Eigen::Vector3d;
-
-StereoCalibration calib() { return {700.0, 320.0, 240.0, 0.5, 640, 480}; }
-
-// Stereo covariance of a camera-frame point: disparity sigma 0.3 px, image plane `sigma_uv` px.
-Matrix3d stereoCov(const Vector3d& p, double sigma_uv = 0.5) {
-  const auto c = calib();
-  const double u = c.f_px * p.x() / p.z() + c.cx_px, v = c.f_px * p.y() / p.z() + c.cy_px;
-  return reprojectPixel(c, u, v, c.f_px * c.baseline_m / p.z(), 0.3, sigma_uv).cov;
-}
-
-bool visible(const Vector3d& p) {
-  const auto c = calib();
-  if (p.z() < 2.0) return false;
-  const double u = c.f_px * p.x() / p.z() + c.cx_px, v = c.f_px * p.y() / p.z() + c.cy_px;
-  return u > 10 && u < c.width - 10 && v > 10 && v < c.height - 10;
-}
-
-template <int N>
-Eigen::Matrix<double, N, 1> sample(const Eigen::Matrix<double, N, N>& cov, std::mt19937& rng) {
-  std::normal_distribution<double> g(0, 1);
-  Eigen::Matrix<double, N, 1> n;
-  for (int i = 0; i < N; ++i) n(i) = g(rng);
-  return Eigen::Matrix<double, N, N>(cov.llt().matrixL()) * n;
-}
-
-Isometry3d pose(const Vector3d& w, const Vector3d& t) {
-  Isometry3d T = Isometry3d::Identity();
-  T.linear() = expSO3(w);
-  T.translation() = t;
-  return T;
-}
-
-// VME-like motion covariance [dtheta, dt]: 2 mrad, 2 cm, rotation/translation coupled.
-Matrix6d motionCov() {
-  Matrix6d C = Matrix6d::Identity();
-  C(1, 3) = C(3, 1) = 0.6;
-  C(0, 4) = C(4, 0) = -0.6;
-  const Vector6d s = (Vector6d() << 2e-3, 2e-3, 1e-3, 0.02, 0.02, 0.01).finished();
-  return s.asDiagonal() * C * s.asDiagonal();
-}
-
-// Central differences of f (R^k -> R^r) at 0.
-template <int R, int K, class F>
-Eigen::Matrix<double, R, K> numericJacobian(F f) {
-  Eigen::Matrix<double, R, K> J;
-  const double h = 1e-6;
-  for (int k = 0; k < K; ++k) {
-    Eigen::Matrix<double, K, 1> d = Eigen::Matrix<double, K, 1>::Zero();
-    d(k) = h;
-    J.col(k) = (f(d) - f(-d)) / (2 * h);
-  }
-  return J;
-}
-
-TEST(PoseJacobians, PredictionMatchesNumericalDifferentiation) {
-  const Isometry3d T = pose({0.3, -0.7, 0.2}, {4, -1, 2}),
-                   u = pose({0.05, 0.02, -0.1}, {0.5, 0.1, 1.3});
-  Matrix6d F_x, F_u;
-  predictionJacobians(T, u, F_x, F_u);
-  const Isometry3d T_new = predictPose(T, u);
-  const auto nx = numericJacobian<6, 6>(
-      [&](const Vector6d& d) { return Vector6d(boxMinus(predictPose(boxPlus(T, d), u), T_new)); });
-  const auto nu = numericJacobian<6, 6>(
-      [&](const Vector6d& d) { return Vector6d(boxMinus(predictPose(T, boxPlus(u, d)), T_new)); });
-  EXPECT_LT((F_x - nx).cwiseAbs().maxCoeff(), 1e-7);
-  EXPECT_LT((F_u - nu).cwiseAbs().maxCoeff(), 1e-7);
-}
-
-TEST(PoseJacobians, ObservationAndInitialisationMatchNumericalDifferentiation) {
-  const Isometry3d T = pose({-0.4, 0.9, 0.1}, {1, 2, -3});
-  const Vector3d m(5, -2, 12), z(0.7, -0.3, 8);
-  Matrix36d H_p, G_x;
-  Matrix3d H_m, G_z;
-  observationJacobians(T, m, H_p, H_m);
-  initJacobians(T, z, G_x, G_z);
-  const auto nHp = numericJacobian<3, 6>(
-      [&](const Vector6d& d) { return Vector3d(observeLandmark(boxPlus(T, d), m)); });
-  const auto nHm =
-      numericJacobian<3, 3>([&](const Vector3d& d) { return Vector3d(observeLandmark(T, m + d)); });
-  const auto nGx = numericJacobian<3, 6>(
-      [&](const Vector6d& d) { return Vector3d(initLandmark(boxPlus(T, d), z)); });
-  const auto nGz =
-      numericJacobian<3, 3>([&](const Vector3d& d) { return Vector3d(initLandmark(T, z + d)); });
-  EXPECT_LT((H_p - nHp).cwiseAbs().maxCoeff(), 1e-7);
-  EXPECT_LT((H_m - nHm).cwiseAbs().maxCoeff(), 1e-7);
-  EXPECT_LT((G_x - nGx).cwiseAbs().maxCoeff(), 1e-7);
-  EXPECT_LT((G_z - nGz).cwiseAbs().maxCoeff(), 1e-7);
-  EXPECT_LT((observeLandmark(T, initLandmark(T, z)) - z).norm(), 1e-12);
-}
 
 // A filter holding `n` landmarks seen from a random pose with a correlated covariance.
 EkfSlam filledFilter(int n, std::mt19937& rng, std::vector<Vector3d>* truth = nullptr,
@@ -204,84 +118,6 @@ TEST(EkfSlam, SparseUpdateMatchesDenseTextbookReference) {
     Matrix3d C0;
     ASSERT_TRUE(ekf.landmark(ekf.landmarkIds()[2], m0, C0).isOk());
     EXPECT_LT((m0 - x.segment<3>(12) - dx.segment<3>(12)).norm(), 1e-10);
-  }
-}
-
-// Wilson-Hilferty quantile of chi-square with k dof at the standard normal quantile zq.
-double chi2Quantile(double k, double zq) {
-  const double a = 2.0 / (9.0 * k);
-  return k * std::pow(1 - a + zq * std::sqrt(a), 3);
-}
-
-// One run of the simulated sequence: camera translating sideways and forward among 40 points,
-// landmarks initialised in frames 0-2, updates afterwards. Returns the pose NEES per frame.
-// The observation covariance given to the filter is that of the noise actually drawn (stereo
-// covariance at the true point) when cov_at_truth, else the one computed at the measured point.
-std::vector<double> simulateRun(std::uint32_t seed, int frames, bool cov_at_truth) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> ux(-8, 14), uy(-4, 4), uz(6, 25);
-  std::vector<Vector3d> pts;
-  for (int i = 0; i < 40; ++i) pts.emplace_back(ux(rng), uy(rng), uz(rng));
-  const Matrix6d P0 = (Vector6d() << 1e-6, 1e-6, 1e-6, 1e-4, 1e-4, 1e-4).finished().asDiagonal();
-  const Matrix6d R_u = motionCov();
-  const Isometry3d step = pose({0.004, -0.01, 0.003}, {0.35, 0.02, 0.1});  // T_prev_cur
-  Isometry3d T_true = pose({0.02, 0.05, -0.01}, {0, 0, 0});
-  EkfSlam ekf(EkfSlamParams{});
-  EXPECT_TRUE(ekf.reset(boxPlus(T_true, -sample<6>(P0, rng)), P0).isOk());
-  std::vector<int> id_of(pts.size(), -1);
-  std::vector<double> nees;
-  std::vector<LandmarkObservation> obs;
-  std::vector<ObservationResult> res;
-  for (int k = 0; k < frames; ++k) {
-    if (k > 0) {
-      T_true = T_true * step;
-      const Isometry3d u_true = step.inverse();
-      EXPECT_TRUE(ekf.predict(boxPlus(u_true, -sample<6>(R_u, rng)), R_u).isOk());
-    }
-    obs.clear();
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-      const Vector3d p = T_true.inverse() * pts[i];
-      if (!visible(p)) continue;
-      const Vector3d z = p + sample<3>(stereoCov(p), rng);
-      if (id_of[i] >= 0) {
-        obs.push_back({id_of[i], z, stereoCov(cov_at_truth ? p : z)});
-      } else if (k < 3) {
-        id_of[i] = ekf.addLandmark(z, stereoCov(cov_at_truth ? p : z)).value();
-      }
-    }
-    if (k > 0) {
-      EXPECT_TRUE(ekf.update(obs, res).isOk());
-    }
-    const Vector6d e = boxMinus(T_true, ekf.pose());
-    nees.push_back(e.dot(ekf.poseCovariance().ldlt().solve(e)));
-  }
-  return nees;
-}
-
-// Average NEES of the 6-dof pose error over 30 runs inside the two-sided 95 % band of
-// chi-square(6 runs) / runs. Also printed (not asserted): the same runs with the covariance
-// computed at the measured point, as a real front end does (depth-dependent noise makes near-
-// measured points look more precise, a mild overconfidence).
-TEST(EkfSlam, MonteCarloPoseNeesInsideChiSquareBand) {
-  const int runs = 30, frames = 25;
-  const double lo = chi2Quantile(6.0 * runs, -1.959964) / runs,
-               hi = chi2Quantile(6.0 * runs, 1.959964) / runs;
-  std::printf("pose NEES averaged over %d runs (95 %% band [%.2f, %.2f]):\n", runs, lo, hi);
-  for (bool cov_at_truth : {true, false}) {
-    std::vector<double> mean(frames, 0.0);
-    for (int r = 0; r < runs; ++r) {
-      const auto nees = simulateRun(1000 + static_cast<std::uint32_t>(r), frames, cov_at_truth);
-      for (int k = 0; k < frames; ++k)
-        mean[static_cast<std::size_t>(k)] += nees[static_cast<std::size_t>(k)] / runs;
-    }
-    std::printf("  R at the %s point:", cov_at_truth ? "true" : "measured");
-    for (int k : {4, 8, 12, 16, 20, 24}) {
-      std::printf("  frame %d: %.2f", k, mean[static_cast<std::size_t>(k)]);
-      if (!cov_at_truth) continue;
-      EXPECT_GT(mean[static_cast<std::size_t>(k)], lo) << "frame " << k;
-      EXPECT_LT(mean[static_cast<std::size_t>(k)], hi) << "frame " << k;
-    }
-    std::printf("\n");
   }
 }
 

@@ -1,0 +1,67 @@
+// Analytic Jacobians of the pose composition, observation and landmark initialisation
+// (slam/pose_jacobians.hpp) against central numerical differences.
+#include "slam/pose_jacobians.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+
+#include "ekf_test_support.hpp"
+#include "motion/visual_motion.hpp"
+#include "slam/ekf_slam.hpp"
+#include "slam/pose_jacobians.hpp"
+#include "stereo/reprojection.hpp"
+
+namespace svslam {
+namespace {
+
+using namespace ekf_test;  // NOLINT: the shared fixtures
+using Eigen::Isometry3d;
+using Eigen::Matrix3d;
+using Eigen::MatrixXd;
+using Eigen::Vector3d;
+
+TEST(PoseJacobians, PredictionMatchesNumericalDifferentiation) {
+  const Isometry3d T = pose({0.3, -0.7, 0.2}, {4, -1, 2}),
+                   u = pose({0.05, 0.02, -0.1}, {0.5, 0.1, 1.3});
+  Matrix6d F_x, F_u;
+  predictionJacobians(T, u, F_x, F_u);
+  const Isometry3d T_new = predictPose(T, u);
+  const auto nx = numericJacobian<6, 6>(
+      [&](const Vector6d& d) { return Vector6d(boxMinus(predictPose(boxPlus(T, d), u), T_new)); });
+  const auto nu = numericJacobian<6, 6>(
+      [&](const Vector6d& d) { return Vector6d(boxMinus(predictPose(T, boxPlus(u, d)), T_new)); });
+  EXPECT_LT((F_x - nx).cwiseAbs().maxCoeff(), 1e-7);
+  EXPECT_LT((F_u - nu).cwiseAbs().maxCoeff(), 1e-7);
+}
+
+TEST(PoseJacobians, ObservationAndInitialisationMatchNumericalDifferentiation) {
+  const Isometry3d T = pose({-0.4, 0.9, 0.1}, {1, 2, -3});
+  const Vector3d m(5, -2, 12), z(0.7, -0.3, 8);
+  Matrix36d H_p, G_x;
+  Matrix3d H_m, G_z;
+  observationJacobians(T, m, H_p, H_m);
+  initJacobians(T, z, G_x, G_z);
+  const auto nHp = numericJacobian<3, 6>(
+      [&](const Vector6d& d) { return Vector3d(observeLandmark(boxPlus(T, d), m)); });
+  const auto nHm =
+      numericJacobian<3, 3>([&](const Vector3d& d) { return Vector3d(observeLandmark(T, m + d)); });
+  const auto nGx = numericJacobian<3, 6>(
+      [&](const Vector6d& d) { return Vector3d(initLandmark(boxPlus(T, d), z)); });
+  const auto nGz =
+      numericJacobian<3, 3>([&](const Vector3d& d) { return Vector3d(initLandmark(T, z + d)); });
+  EXPECT_LT((H_p - nHp).cwiseAbs().maxCoeff(), 1e-7);
+  EXPECT_LT((H_m - nHm).cwiseAbs().maxCoeff(), 1e-7);
+  EXPECT_LT((G_x - nGx).cwiseAbs().maxCoeff(), 1e-7);
+  EXPECT_LT((G_z - nGz).cwiseAbs().maxCoeff(), 1e-7);
+  EXPECT_LT((observeLandmark(T, initLandmark(T, z)) - z).norm(), 1e-12);
+}
+
+}  // namespace
+}  // namespace svslam
