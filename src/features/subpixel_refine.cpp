@@ -17,7 +17,7 @@ Status SubpixelRefineParams::validate() const {
 
 namespace {
 
-constexpr int kMaxHalf = 15;                // patch half sizes up to 15 (side 31)
+constexpr int kMaxHalf = 15;  // patch half sizes up to 15 (side 31)
 constexpr int kMaxSide = 2 * kMaxHalf + 1;
 
 // Interpolation kernel: Lanczos-4, w_m(t) = sinc(m - t) sinc((m - t) / 4) for the eight taps
@@ -37,7 +37,7 @@ void lanczosWeights(double t, float w_out[kTaps]) {
   const double s4 = std::sin(kPi * t / kA), c4 = std::cos(kPi * t / kA);
   static constexpr double kSinM[kTaps] = {-0.70710678118654752, -1.0, -0.70710678118654752, 0.0,
                                           0.70710678118654752,  1.0,  0.70710678118654752,  0.0};
-  static constexpr double kCosM[kTaps] = {-0.70710678118654752, 0.0, 0.70710678118654752, 1.0,
+  static constexpr double kCosM[kTaps] = {-0.70710678118654752, 0.0, 0.70710678118654752,  1.0,
                                           0.70710678118654752,  0.0, -0.70710678118654752, -1.0};
   double w[kTaps];
   double s0 = 0.0, s1 = 0.0, sx = 0.0, sxx = 0.0;
@@ -46,8 +46,8 @@ void lanczosWeights(double t, float w_out[kTaps]) {
     const double x = m - t;
     double v = 1.0;
     if (std::abs(x) > 1e-9) {
-      const double sin_px = (m % 2 == 0 ? -st : st);              // sin(pi (m - t))
-      const double sin_px4 = kSinM[k] * c4 - kCosM[k] * s4;       // sin(pi (m - t) / 4)
+      const double sin_px = (m % 2 == 0 ? -st : st);         // sin(pi (m - t))
+      const double sin_px4 = kSinM[k] * c4 - kCosM[k] * s4;  // sin(pi (m - t) / 4)
       const double px = kPi * x;
       v = kA * sin_px * sin_px4 / (px * px);
     }
@@ -102,8 +102,8 @@ float normalise(const float* v, int n, float* out) {
 
 }  // namespace
 
-bool refineDisparity(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                     int x, int y, int h, double d_start, const SubpixelRefineParams& params,
+bool refineDisparity(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right, int x,
+                     int y, int h, double d_start, const SubpixelRefineParams& params,
                      double& d_px) {
   if (!std::isfinite(d_start) || std::abs(d_start) > 1e6) return false;
   if (h < 1 || h > kMaxHalf || y - h < 0 || y + h >= left.height || left.height != right.height ||
@@ -169,7 +169,7 @@ bool refineTranslation(const std::uint8_t* tmpl, int h, ImageView<const std::uin
   // The template's interior (offsets -(h-1) .. h-1), where central differences exist.
   const int hi = h - 1, si = 2 * hi + 1, count = si * si;
   std::array<float, kMaxSide * kMaxSide> t, gx, gy, smp, smp_n;  // only [0, count) is used
-  std::array<float, (kMaxSide + kTaps - 1) * kMaxSide> hs;  // rows resampled in x
+  std::array<float, (kMaxSide + kTaps - 1) * kMaxSide> hs;       // rows resampled in x
   for (int j = 0; j < si; ++j)
     for (int i = 0; i < si; ++i) {
       const std::uint8_t* c = tmpl + (j + 1) * side + (i + 1);

@@ -44,8 +44,8 @@ struct SubpixelRefineParams {
 
 // Disparity of the left patch at integer (x, y), half size h (1..15), in the right image,
 // starting from the disparity d_start.
-bool refineDisparity(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                     int x, int y, int h, double d_start, const SubpixelRefineParams& params,
+bool refineDisparity(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right, int x,
+                     int y, int h, double d_start, const SubpixelRefineParams& params,
                      double& d_px);
 
 // Position (u, v) of the centre of the square template `tmpl` (side 2 h + 1, row-major, stride

@@ -1,8 +1,6 @@
 // Feature-cluster ROIs projected after a known motion: members inside their ROI, the seed's
 // farthest-point radius, clusters behind the camera or outside the image, the unknown mask; bad
 // arguments; the time to cluster 1000 points (printed).
-#include "features/feature_clusters.hpp"
-
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -12,6 +10,7 @@
 #include <random>
 
 #include "feature_clusters_points.hpp"
+#include "features/feature_clusters.hpp"
 
 namespace svslam {
 namespace {

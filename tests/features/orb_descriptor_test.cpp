@@ -1,7 +1,5 @@
 // ORB descriptors and scales against known image transforms (cv::warpAffine, cv::resize):
 // matching under rotation and scale, the Hamming distance, the seeded pattern.
-#include "features/orb_extractor.hpp"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -18,6 +16,7 @@
 #include <utility>
 
 #include "features/fast_detector.hpp"
+#include "features/orb_extractor.hpp"
 #include "orb_test_support.hpp"
 
 namespace svslam {

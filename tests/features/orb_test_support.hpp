@@ -88,7 +88,8 @@ inline Features extract(const cv::Mat& m, const OrbParams& p = {}) {
 }
 
 // Brute-force Hamming nearest neighbour from a to b with Lowe's ratio test.
-inline std::vector<std::pair<int, int>> matchRatio(const Features& a, const Features& b, double ratio) {
+inline std::vector<std::pair<int, int>> matchRatio(const Features& a, const Features& b,
+                                                   double ratio) {
   std::vector<std::pair<int, int>> out;
   for (std::size_t i = 0; i < a.desc.size(); ++i) {
     int best = 1000, second = 1000, best_j = -1;

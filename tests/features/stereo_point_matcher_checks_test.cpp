@@ -1,8 +1,6 @@
 // Stereo point matcher, after the row search: seed 002's continuity check and recovery, the
 // dense prior, sigma_d, parameters and bad input; checked against the rendered scene of
 // stereo_point_matcher_scene.hpp.
-#include "features/stereo_point_matcher.hpp"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "features/stereo_point_matcher.hpp"
 #include "stereo_point_matcher_scene.hpp"
 
 namespace svslam {
@@ -360,7 +359,6 @@ TEST(StereoPointMatcher, BorderPointsAreSkipped) {
   EXPECT_EQ(st.candidates, 4);
   for (const auto& mm : out) EXPECT_TRUE(mm.index == 6 || mm.index == 7) << mm.index;
 }
-
 
 }  // namespace
 }  // namespace svslam

@@ -186,13 +186,13 @@ TEST(StereoPointMatcher, RefinedSubPixelHasNoPullTowardsIntegers) {
     worst_p = std::max(worst_p, std::abs(bias_p[static_cast<std::size_t>(b)]));
     worst_r = std::max(worst_r, std::abs(bias_r[static_cast<std::size_t>(b)]));
   }
-  std::printf("[ figures  ] parabola: worst bin bias %.4f px, median |error| %.4f px; refined: "
-              "%.4f px, %.4f px\n",
-              worst_p, med_p, worst_r, med_r);
+  std::printf(
+      "[ figures  ] parabola: worst bin bias %.4f px, median |error| %.4f px; refined: "
+      "%.4f px, %.4f px\n",
+      worst_p, med_p, worst_r, med_r);
   EXPECT_LT(worst_r, 0.5 * worst_p);
   EXPECT_LT(med_r, med_p);
 }
-
 
 }  // namespace
 }  // namespace svslam

@@ -108,9 +108,10 @@ BiasStats disparityBias(bool refine, double gain = 1.0, double offset = 0.0) {
 TEST(SubpixelRefine, DisparityHasNoPullTowardsIntegers) {
   const BiasStats parab = disparityBias(false);
   const BiasStats ref = disparityBias(true);
-  std::printf("parabola: worst bias %.4f px, rms %.4f px; refined: worst bias %.4f px, rms %.4f px,"
-              " %d failed\n",
-              parab.worst_bias, parab.rms, ref.worst_bias, ref.rms, ref.failed);
+  std::printf(
+      "parabola: worst bias %.4f px, rms %.4f px; refined: worst bias %.4f px, rms %.4f px,"
+      " %d failed\n",
+      parab.worst_bias, parab.rms, ref.worst_bias, ref.rms, ref.failed);
   EXPECT_GT(parab.worst_bias, 0.015);  // the effect the refinement exists for
   EXPECT_LT(ref.worst_bias, 0.5 * parab.worst_bias);
   EXPECT_LT(ref.worst_bias, 0.012);
@@ -144,8 +145,8 @@ TEST(SubpixelRefine, TranslationOfATemplate) {
           img.view()(x, y) = static_cast<std::uint8_t>(std::clamp(
               std::lround(1.2 * tex(50.3 + x - 60 - du, 40.7 + y - 30 - dv) - 15.0), 0L, 255L));
       double u = 0, v = 0;
-      ASSERT_TRUE(refineTranslation(tmpl.data(), h, img.cview(), 60, 30, SubpixelRefineParams{},
-                                    u, v))
+      ASSERT_TRUE(
+          refineTranslation(tmpl.data(), h, img.cview(), 60, 30, SubpixelRefineParams{}, u, v))
           << du << " " << dv;
       worst = std::max({worst, std::abs(u - (60 + du)), std::abs(v - (30 + dv))});
     }

@@ -100,8 +100,8 @@ struct World {
 
 // Stereo-like covariance of a point p_cam (b = 0.3 m, sigma 0.3 px in u, v and d): lateral
 // sigma z s / f, along the ray z^2 s / (f b).
-Eigen::Matrix3d stereoCov(const PinholeCamera& cam, const Eigen::Vector3d& p_cam,
-                          Eigen::Matrix3d& L) {
+inline Eigen::Matrix3d stereoCov(const PinholeCamera& cam, const Eigen::Vector3d& p_cam,
+                                 Eigen::Matrix3d& L) {
   const double z = p_cam.z(), s = 0.3, b = 0.3;
   const double sl = z * s / cam.fx_px, sz = z * z * s / (cam.fx_px * b);
   const Eigen::Vector3d r = p_cam.normalized();
@@ -113,8 +113,8 @@ Eigen::Matrix3d stereoCov(const PinholeCamera& cam, const Eigen::Vector3d& p_cam
   return L * L.transpose();
 }
 
-inline TrackPoint makePoint(const PinholeCamera& cam, double u, double v, const Eigen::Vector3d& p_true,
-                     std::mt19937& rng) {
+inline TrackPoint makePoint(const PinholeCamera& cam, double u, double v,
+                            const Eigen::Vector3d& p_true, std::mt19937& rng) {
   std::normal_distribution<double> n01(0, 1);
   TrackPoint p;
   p.u_px = static_cast<float>(u);

@@ -1,7 +1,5 @@
 // EKF SLAM consistency (seed 001 sec. 4): the pose NEES over seeded Monte Carlo runs of a
 // simulated sequence stays inside the chi-square 95 % band.
-#include "slam/ekf_slam.hpp"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
