@@ -13,6 +13,7 @@
 
 #include "core/image.hpp"
 #include "features/stereo_point_matcher.hpp"
+#include "wave_texture.hpp"
 
 namespace svslam::stereo_scene {
 
@@ -20,29 +21,9 @@ namespace svslam::stereo_scene {
 // Stereo point matcher
 // ------------------------------------------------------------------------------------------
 
-// Continuous band-limited texture: a sum of random plane waves (wavelengths 5..40 px).
-class Texture {
- public:
-  explicit Texture(unsigned seed, int k = 32) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> u01(0, 1);
-    for (int i = 0; i < k; ++i) {
-      const double th = 2 * M_PI * u01(rng);
-      const double lambda = 5.0 * std::pow(8.0, u01(rng));
-      const double w = 2 * M_PI / lambda;
-      waves_.push_back({w * std::cos(th), w * std::sin(th), 2 * M_PI * u01(rng)});
-    }
-    amp_ = 55.0 / std::sqrt(0.5 * k);
-  }
-  double operator()(double x, double y) const {
-    double s = 0;
-    for (const auto& w : waves_) s += std::sin(w[0] * x + w[1] * y + w[2]);
-    return 128.0 + amp_ * s;
-  }
-
- private:
-  std::vector<std::array<double, 3>> waves_;
-  double amp_ = 1;
+// Continuous band-limited texture (pixels): 32 plane waves, wavelengths 5..40 px.
+struct Texture : test_texture::WaveTexture {
+  explicit Texture(unsigned seed) : WaveTexture(seed, 5.0, 40.0, 32, 55.0) {}
 };
 
 inline std::uint8_t toU8(double v) {

@@ -11,33 +11,15 @@
 #include <vector>
 
 #include "features/patch_similarity.hpp"
+#include "wave_texture.hpp"
 
 namespace svslam {
 namespace {
 
-// A sum of random plane waves with wavelengths 3.2 .. 40 px (up to 2 rad/px: near-Nyquist
-// content, where interpolation errors are largest).
-class WaveTexture {
- public:
-  explicit WaveTexture(unsigned seed, int k = 24) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> u01(0, 1);
-    for (int i = 0; i < k; ++i) {
-      const double th = 2 * M_PI * u01(rng);
-      const double w = 2 * M_PI / (3.2 * std::pow(12.5, u01(rng)));
-      waves_.push_back({w * std::cos(th), w * std::sin(th), 2 * M_PI * u01(rng)});
-    }
-    amp_ = 30.0 / std::sqrt(0.5 * k);  // standard deviation 30: rarely clipped
-  }
-  double operator()(double x, double y) const {
-    double s = 0;
-    for (const auto& w : waves_) s += std::sin(w[0] * x + w[1] * y + w[2]);
-    return 128.0 + amp_ * s;
-  }
-
- private:
-  std::vector<std::array<double, 3>> waves_;
-  double amp_ = 0;
+// Plane waves with wavelengths 3.2 .. 40 px (up to 2 rad/px: near-Nyquist content, where
+// interpolation errors are largest), standard deviation 30 (rarely clipped).
+struct WaveTexture : test_texture::WaveTexture {
+  explicit WaveTexture(unsigned seed) : test_texture::WaveTexture(seed, 3.2, 40.0, 24, 30.0) {}
 };
 
 // image(x, y) = clamp(round(gain * tex(x + dx, y + dy) + offset)).

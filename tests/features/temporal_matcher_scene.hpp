@@ -16,32 +16,14 @@
 #include "core/camera.hpp"
 #include "core/image.hpp"
 #include "features/temporal_matcher.hpp"
+#include "wave_texture.hpp"
 
 namespace svslam::temporal_scene {
 
-// Continuous band-limited texture on a plane (metres): a sum of random plane waves.
-class Texture {
- public:
-  Texture(unsigned seed, double lambda_min_m, double lambda_max_m, int k = 24) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> u01(0, 1);
-    for (int i = 0; i < k; ++i) {
-      const double th = 2 * M_PI * u01(rng);
-      const double lambda = lambda_min_m * std::pow(lambda_max_m / lambda_min_m, u01(rng));
-      const double w = 2 * M_PI / lambda;
-      waves_.push_back({w * std::cos(th), w * std::sin(th), 2 * M_PI * u01(rng)});
-    }
-    amp_ = 55.0 / std::sqrt(0.5 * k);
-  }
-  double operator()(double x, double y) const {
-    double s = 0;
-    for (const auto& w : waves_) s += std::sin(w[0] * x + w[1] * y + w[2]);
-    return 128.0 + amp_ * s;
-  }
-
- private:
-  std::vector<std::array<double, 3>> waves_;
-  double amp_ = 1;
+// Continuous band-limited texture on a plane (metres): 24 plane waves.
+struct Texture : test_texture::WaveTexture {
+  Texture(unsigned seed, double lambda_min_m, double lambda_max_m)
+      : WaveTexture(seed, lambda_min_m, lambda_max_m, 24, 55.0) {}
 };
 
 // World frame = previous left camera frame. Background: the plane -0.2 x + 0.1 y + z = 4

@@ -2,27 +2,20 @@
 // simulated sequence stays inside the chi-square 95 % band.
 #include <gtest/gtest.h>
 
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
-#include <algorithm>
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <random>
+#include <vector>
 
 #include "ekf_test_support.hpp"
-#include "motion/visual_motion.hpp"
 #include "slam/ekf_slam.hpp"
-#include "slam/pose_jacobians.hpp"
-#include "stereo/reprojection.hpp"
 
 namespace svslam {
 namespace {
 
 using namespace ekf_test;  // NOLINT: the shared fixtures
 using Eigen::Isometry3d;
-using Eigen::Matrix3d;
-using Eigen::MatrixXd;
 using Eigen::Vector3d;
 
 // Wilson-Hilferty quantile of chi-square with k dof at the standard normal quantile zq.

@@ -4,28 +4,18 @@
 
 #include <gtest/gtest.h>
 
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
-#include <algorithm>
-#include <cmath>
-#include <cstdio>
-#include <limits>
-#include <random>
+#include <Eigen/Geometry>
 
 #include "ekf_test_support.hpp"
-#include "motion/visual_motion.hpp"
-#include "slam/ekf_slam.hpp"
-#include "slam/pose_jacobians.hpp"
-#include "stereo/reprojection.hpp"
 
 namespace svslam {
 namespace {
 
-using namespace ekf_test;  // NOLINT: the shared fixtures
 using Eigen::Isometry3d;
 using Eigen::Matrix3d;
-using Eigen::MatrixXd;
 using Eigen::Vector3d;
+using ekf_test::numericJacobian;
+using ekf_test::pose;
 
 TEST(PoseJacobians, PredictionMatchesNumericalDifferentiation) {
   const Isometry3d T = pose({0.3, -0.7, 0.2}, {4, -1, 2}),
