@@ -65,16 +65,24 @@ void lanczosWeights(double t, float w_out[kTaps]) {
     w_out[m + kTapsBefore] = static_cast<float>(w[m + kTapsBefore] + l0 + l1 * (m - t));
 }
 
-// Samples s[k] = row(x_first + k + alpha), k in [0, n), with the weights of lanczosWeights(alpha),
-// x_first an integer. Precondition: pixels x_first - 3 .. x_first + n + 3 are inside the row.
-// The loop over k is the inner one so it vectorises.
-void sampleRow(const std::uint8_t* row, int x_first, const float w[kTaps], int n, float* s) {
-  const std::uint8_t* p = row + x_first - kTapsBefore;
+// Weighted taps s[k] = sum_m w[m] p[k + m step], k in [0, n), m in [0, kTaps): one pass of the
+// separable resampling, along a row (step 1, uint8 pixels) or down columns (step = the row
+// length of a buffer of already resampled rows). The loop over k is the inner one so it
+// vectorises. Precondition: every p[k + m step] is readable.
+template <class T>
+void applyTaps(const T* p, int step, const float w[kTaps], int n, float* s) {
   for (int k = 0; k < n; ++k) s[k] = w[0] * static_cast<float>(p[k]);
   for (int m = 1; m < kTaps; ++m) {
     const float wm = w[m];
-    for (int k = 0; k < n; ++k) s[k] += wm * static_cast<float>(p[k + m]);
+    const T* q = p + m * step;
+    for (int k = 0; k < n; ++k) s[k] += wm * static_cast<float>(q[k]);
   }
+}
+
+// Samples s[k] = row(x_first + k + alpha), k in [0, n), with the weights of lanczosWeights(alpha),
+// x_first an integer. Precondition: pixels x_first - 3 .. x_first + n + 3 are inside the row.
+void sampleRow(const std::uint8_t* row, int x_first, const float w[kTaps], int n, float* s) {
+  applyTaps(row + x_first - kTapsBefore, 1, w, n, s);
 }
 
 // Splits a real position into floor and fraction.
@@ -207,13 +215,9 @@ bool refineTranslation(const std::uint8_t* tmpl, int h, ImageView<const std::uin
     lanczosWeights(ay, wy);
     for (int r = 0; r < si + kTaps - 1; ++r)
       sampleRow(image.row(iy - kTapsBefore + r), ix, wx, si, &hs[static_cast<std::size_t>(r * si)]);
-    for (int r = 0; r < si; ++r) {
-      float* out = &smp[static_cast<std::size_t>(r * si)];
-      const float* in = &hs[static_cast<std::size_t>(r * si)];
-      for (int k = 0; k < si; ++k) out[k] = wy[0] * in[k];
-      for (int m = 1; m < kTaps; ++m)
-        for (int k = 0; k < si; ++k) out[k] += wy[m] * in[m * si + k];
-    }
+    for (int r = 0; r < si; ++r)
+      applyTaps(&hs[static_cast<std::size_t>(r * si)], si, wy, si,
+                &smp[static_cast<std::size_t>(r * si)]);
     if (normalise(smp.data(), count, smp_n.data()) == 0.0f) return false;
     // I(u + delta) ~ I(u) + grad T . delta, so delta = H^-1 sum grad T (T - I).
     double bx = 0.0, by = 0.0;

@@ -164,7 +164,7 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     // the parabola stays when it does not converge.
     double u_ref = 0.0, v_ref = 0.0;
     if (params_.refine_observations &&
-        refineTranslation(tmpl_.data(), h, left, u, v, refine_, u_ref, v_ref)) {
+        refineTranslation(tmpl_.data(), h, left, u, v, SubpixelRefineParams{}, u_ref, v_ref)) {
       u = static_cast<float>(u_ref);
       v = static_cast<float>(v_ref);
     }
@@ -224,7 +224,9 @@ void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameRe
     return static_cast<std::size_t>(cy * params_.grid_cols + cx);
   };
   auto sigmaOf = [](const TrackPoint& p) { return std::sqrt(p.cov.trace()); };
-  auto nearObserved = [&](const TrackPoint& p) { return nearLandmark(landmark_uv_, p.u_px, p.v_px); };
+  auto nearObserved = [&](const TrackPoint& p) {
+    return nearLandmark(landmark_uv_, p.u_px, p.v_px);
+  };
   std::fill(cell_count_.begin(), cell_count_.end(), 0);
   for (const Eigen::Vector2f& l : landmark_uv_) ++cell_count_[cellOf(l.x(), l.y())];
   for (std::size_t j = 0; j < pts.size(); ++j)

@@ -46,7 +46,6 @@
 #include "core/image.hpp"
 #include "core/stage_observer.hpp"
 #include "core/status.hpp"
-#include "features/subpixel_refine.hpp"
 #include "odometry/stereo_odometry.hpp"
 #include "slam/ekf_slam.hpp"
 #include "slam/landmark_manager.hpp"
@@ -161,7 +160,6 @@ class SlamSystem {
   std::vector<SearchPrediction> preds_;  // landmarks predicted in the image, this frame
   std::vector<int> fresh_;               // points matched for the first time, this frame
   std::vector<std::uint8_t> tmpl_;  // warped landmark template
-  SubpixelRefineParams refine_;     // observation refinement (defaults)
   std::vector<int> cell_count_;
   int frame_ = 0;
 };
