@@ -67,17 +67,23 @@
 namespace svslam {
 
 struct EkfSlamParams {
-  int max_landmarks = 300;          // landmarks in the state at once, [1, 3000]; P storage of
-                                    // (6 + 3 max)^2 doubles is preallocated (300: 6.5 MB)
-  int max_batch_observations = 64;  // observations stacked in one update, [1, 1000]; more
+  // Cost of an update with k observations in batches of b, n = 6 + 3 N (N landmarks), m = 3 b:
+  // per batch n^2 m (the n x n product, lower triangle of a rank-2m update) + 2 n m^2 (gain and
+  // its round-off D) + O(m^3), i.e. 3 k (n^2 + 2 n m) multiply-adds in all: the state size, not
+  // the batch, sets the cost, and small batches avoid the n m^2 terms. The defaults (120
+  // landmarks, batches of 16) keep 100 observations a frame about as cheap as 30 with 300
+  // landmarks (about 50M multiply-adds; bench/bench_ekf measures both).
+  int max_landmarks = 120;          // landmarks in the state at once, [1, 3000]; P storage of
+                                    // (6 + 3 max)^2 doubles is preallocated (120: 1.1 MB)
+  int max_batch_observations = 16;  // observations stacked in one update, [1, 1000]; more
                                     // accepted observations are applied in successive batches
   double gate_chi2 = 11.34;         // Mahalanobis d^2 threshold, chi-square with 3 dof
                                     // (11.34: 99 %, 7.81: 95 %, 16.27: 99.9 %), > 0
   bool joseph_form = true;  // Joseph-form covariance update; false: optimal-gain form P - B B^T
   int max_update_tasks = 2;  // row pieces the update's products are split into on the executor
                              // given to update(), [1, 16]; each piece has its own preallocated
-                             // workspace of (2 n_max + 32) 2 m_max doubles (300 landmarks and
-                             // 64 observations: 5.7 MB). Results do not depend on it.
+                             // workspace of (2 n_max + 32) 2 m_max doubles (120 landmarks and
+                             // batches of 16: 0.6 MB). Results do not depend on it.
   Status validate() const;
 };
 

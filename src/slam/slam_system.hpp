@@ -11,7 +11,7 @@
 //     T_cur_prev and its covariance (when the VME fails: the previous motion with
 //     lost_rot_sigma_rad / lost_trans_sigma_m, documented, not tuned per sequence);
 //  3. observations: every landmark of the state predicted inside the image is searched by ZNCC
-//     of its patch (from its last observation) over the left image, within
+//     of its patch (taken at initialisation, never updated) over the left image, within
 //     tolerance + 3 sigma of its predicted projection (sigma from the pose and landmark
 //     covariances), then matched along the row in the right image around its predicted
 //     disparity. A landmark observed in the previous frame uses the 0.5 px matching error of
@@ -66,7 +66,8 @@ struct SlamSystemParams {
   double track_tolerance_px = 1.5;          // consecutive frames (seed: 1.5 px)
   double reperception_tolerance_px = 2.5;   // (seed: about 2.5 px)
   int max_reperceptions = 10;               // re-perception searches per frame, >= 0
-  int max_observations = 30;                // landmark observations per frame, >= 1
+  int max_observations = 100;  // landmark observations per frame, >= 1: seed 001 updates with
+                               // every landmark matched; this only bounds the update cost
   double landmark_exclusion_px = 2.0;       // see step 2, px, >= 0
   double reperception_max_radius_px = 60.0;  // cap of the search radius, px
   float reperception_min_zncc = 0.8f;

@@ -24,6 +24,8 @@ struct Outcome {
 
 Outcome runFilter(bool joseph, int tasks, Executor* executor) {
   EkfSlamParams params;
+  params.max_landmarks = 300;  // 250 below: rows enough to split into pieces
+  params.max_batch_observations = 64;
   params.joseph_form = joseph;
   params.max_update_tasks = tasks;
   EkfSlam ekf(params);

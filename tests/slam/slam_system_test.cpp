@@ -93,7 +93,7 @@ double rmsError(const std::vector<Eigen::Isometry3d>& gt,
 
 // The blimp loop (about 70 m at 25-30 m altitude, 2.2 m baseline), rendered at half size to
 // keep the test short; `svslam run` on the full-size flight is measured in docs/slam.md.
-TEST(SlamSystem, SyntheticBlimpLoopWithinTargetsAndNoWorseThanOdometry) {
+TEST(SlamSystem, SyntheticBlimpLoopWithinTargetsAndBetterThanOdometry) {
   const RunOut r = runSlam("synthetic:width=512,height=384", SlamSystemParams{});
   const std::vector<Eigen::Isometry3d> vo = runVo("synthetic:width=512,height=384");
   ASSERT_EQ(r.gt.size(), 100u);
@@ -114,11 +114,12 @@ TEST(SlamSystem, SyntheticBlimpLoopWithinTargetsAndNoWorseThanOdometry) {
               nees->position_within_2sigma_pct, r.max_in_state, r.reperceived);
   EXPECT_LE(e_slam, 0.15);
   EXPECT_LE(att_slam, 0.5);
-  // The issue asks for 3x better than odometry at the end of the loop; on this clean scene the
-  // two are within noise of each other (docs/slam.md: the final-frame ratio ranges 0.7-3.3 over
-  // seeds). The test holds the filter to "no worse than odometry" over the whole run (the rms
-  // of every frame's error, far less noisy than the one final frame) so a regression shows.
-  EXPECT_LE(rms_slam, rms_vo * 1.1);
+  // The issue asks for 3x better than odometry at the end of the loop. Measured on this seed:
+  // final 0.0120 m against 0.0276 m (2.3x), rms over the frames 0.0104 m against 0.0294 m
+  // (2.8x); over seeds 1-6 the final-frame ratio ranges 0.4-4.9 (docs/slam.md), so the test
+  // holds the filter to 1.5x better than odometry on the rms of every frame's error (far less
+  // noisy than the one final frame): a regression of the filter shows.
+  EXPECT_LE(rms_slam * 1.5, rms_vo);
   EXPECT_GE(nees->position_within_2sigma_pct, 90.0);
   EXPECT_GT(r.reperceived, 0);
   EXPECT_LE(r.max_in_state, SlamSystemParams{}.ekf.max_landmarks);
