@@ -79,7 +79,7 @@ struct EkfSlamParams {
                                     // accepted observations are applied in successive batches
   double gate_chi2 = 11.34;         // Mahalanobis d^2 threshold, chi-square with 3 dof
                                     // (11.34: 99 %, 7.81: 95 %, 16.27: 99.9 %), > 0
-  bool joseph_form = true;  // Joseph-form covariance update; false: optimal-gain form P - B B^T
+  bool joseph_form = true;   // Joseph-form covariance update; false: optimal-gain form P - B B^T
   int max_update_tasks = 2;  // row pieces the update's products are split into on the executor
                              // given to update(), [1, 16]; each piece has its own preallocated
                              // workspace of (2 n_max + 32) 2 m_max doubles (120 landmarks and

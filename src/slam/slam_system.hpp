@@ -59,24 +59,24 @@ struct SlamSystemParams {
   double candidate_max_sigma_m = 0.5;  // stability: sqrt(trace cov) of the stereo point, m, > 0
   int grid_cols = 8;                   // representativeness grid over the image, >= 1
   int grid_rows = 6;
-  int max_per_cell = 3;                // landmarks + candidates per cell and frame, >= 1
-  double init_sigma_uv_px = 0.25;      // image-plane localisation at initialisation, px, > 0
-  double track_matching_error_px = 0.5;     // consecutive frames (seed 001 sec 4.1)
+  int max_per_cell = 3;                  // landmarks + candidates per cell and frame, >= 1
+  double init_sigma_uv_px = 0.25;        // image-plane localisation at initialisation, px, > 0
+  double track_matching_error_px = 0.5;  // consecutive frames (seed 001 sec 4.1)
   double reperception_matching_error_px = 1.0;  // re-perceiving after a loop (seed: 1 px)
-  double track_tolerance_px = 1.5;          // consecutive frames (seed: 1.5 px)
-  double reperception_tolerance_px = 2.5;   // (seed: about 2.5 px)
-  int max_reperceptions = 10;               // re-perception searches per frame, >= 0
+  double track_tolerance_px = 1.5;              // consecutive frames (seed: 1.5 px)
+  double reperception_tolerance_px = 2.5;       // (seed: about 2.5 px)
+  int max_reperceptions = 10;                   // re-perception searches per frame, >= 0
   int max_observations = 100;  // landmark observations per frame, >= 1: seed 001 updates with
                                // every landmark matched; this only bounds the update cost
-  double landmark_exclusion_px = 2.0;       // see step 2, px, >= 0
+  double landmark_exclusion_px = 2.0;        // see step 2, px, >= 0
   double reperception_max_radius_px = 60.0;  // cap of the search radius, px
   float reperception_min_zncc = 0.8f;
-  bool refine_observations = true;     // refine a tracked landmark's ZNCC position by
-                                       // Gauss-Newton (subpixel_refine.hpp) instead of keeping
-                                       // the parabola through the scores
-  int patch_half_px = 5;               // appearance patch stored per landmark, 1..15
-  int retire_unseen_frames = 2;        // a landmark unseen for fewer frames is never retired
-  double lost_rot_sigma_rad = 0.035;   // prediction covariance when the VME fails
+  bool refine_observations = true;    // refine a tracked landmark's ZNCC position by
+                                      // Gauss-Newton (subpixel_refine.hpp) instead of keeping
+                                      // the parabola through the scores
+  int patch_half_px = 5;              // appearance patch stored per landmark, 1..15
+  int retire_unseen_frames = 2;       // a landmark unseen for fewer frames is never retired
+  double lost_rot_sigma_rad = 0.035;  // prediction covariance when the VME fails
   double lost_trans_sigma_m = 0.5;
   int map_reserve = 4096;  // landmarks ever initialised (in the state or retired) whose map
                            // storage is preallocated (about 0.7 kB each), >= ekf.max_landmarks;
@@ -86,20 +86,20 @@ struct SlamSystemParams {
 
 struct SlamFrameResult {
   OdometryFrameResult odometry;  // front end + VME (T_first_cam there is pure odometry)
-  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // filter estimate
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();               // filter estimate
   Eigen::Matrix<double, 6, 6> pose_cov = Eigen::Matrix<double, 6, 6>::Zero();  // [rot, trans]
   int landmarks_in_state = 0;
-  int landmarks_in_map = 0;  // in the state + retired
-  int observed = 0;          // landmarks observed (tracked from the previous frame)
-  int reperceived = 0;       // landmarks found again by re-perception
+  int landmarks_in_map = 0;   // in the state + retired
+  int observed = 0;           // landmarks observed (tracked from the previous frame)
+  int reperceived = 0;        // landmarks found again by re-perception
   int predicted_visible = 0;  // landmarks of the state predicted inside the image
   int search_no_match = 0;    // ... not found in the left image (ZNCC)
   int search_no_stereo = 0;   // ... found, but not in the right image
-  int gated = 0;             // observations rejected by the chi-square gate
+  int gated = 0;              // observations rejected by the chi-square gate
   int added = 0;
   int retired = 0;
   int candidates = 0;
-  int vme_matches = 0;       // matches given to the VME (non-landmarks)
+  int vme_matches = 0;  // matches given to the VME (non-landmarks)
 };
 
 class SlamSystem {
@@ -136,12 +136,12 @@ class SlamSystem {
   // A landmark of the state predicted inside the current image (searchLandmarks).
   struct SearchPrediction {
     int id = -1;
-    double u = 0, v = 0, d = 0;  // predicted pixel and disparity, px
-    double sigma_px = 0;         // of the projection, px
-    double sigma_d = 0;          // of the disparity, px
+    double u = 0, v = 0, d = 0;                       // predicted pixel and disparity, px
+    double sigma_px = 0;                              // of the projection, px
+    double sigma_d = 0;                               // of the disparity, px
     Eigen::Vector3d z_cam = Eigen::Vector3d::Zero();  // predicted point, camera frame, m
-    bool tracked = false;        // observed in the previous frame
-    int order = 0;               // position in the state: ties keep it (std::sort, no buffer)
+    bool tracked = false;                             // observed in the previous frame
+    int order = 0;  // position in the state: ties keep it (std::sort, no buffer)
   };
 
   SlamSystemParams params_;
@@ -160,7 +160,7 @@ class SlamSystem {
   std::vector<float> scores_;
   std::vector<SearchPrediction> preds_;  // landmarks predicted in the image, this frame
   std::vector<int> fresh_;               // points matched for the first time, this frame
-  std::vector<std::uint8_t> tmpl_;  // warped landmark template
+  std::vector<std::uint8_t> tmpl_;       // warped landmark template
   std::vector<int> cell_count_;
   int frame_ = 0;
 };
