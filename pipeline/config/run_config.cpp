@@ -123,8 +123,8 @@ Status readSlam(ConfigReader& r, SlamSystemParams& p) {
   SVSLAM_TRY(r.read("slam.max_per_cell", p.max_per_cell, 1, 10000));
   SVSLAM_TRY(r.read("slam.init_sigma_uv_px", p.init_sigma_uv_px, 0.01, 10));
   SVSLAM_TRY(r.read("slam.track_matching_error_px", p.track_matching_error_px, 0.01, 10));
-  SVSLAM_TRY(r.read("slam.reperception_matching_error_px", p.reperception_matching_error_px, 0.01,
-                    10));
+  SVSLAM_TRY(
+      r.read("slam.reperception_matching_error_px", p.reperception_matching_error_px, 0.01, 10));
   SVSLAM_TRY(r.read("slam.reperception_tolerance_px", p.reperception_tolerance_px, 0.01, 100));
   SVSLAM_TRY(r.read("slam.reperception_max_radius_px", p.reperception_max_radius_px, 0.01, 1000));
   SVSLAM_TRY(r.read("slam.reperception_min_zncc", p.reperception_min_zncc, -1, 1));
@@ -162,9 +162,11 @@ static Status parse(ConfigReader& r, RunConfig& out) {
   SVSLAM_TRY(r.read("clusters.min_cluster_size", o.clusters.min_cluster_size, 1, 100000));
   SVSLAM_TRY(r.read("clusters.max_points", o.clusters.max_points, 1, 4096));
   SVSLAM_TRY(r.read("clusters.roi_margin_px", o.clusters.roi_margin_px, 0, 1000));
-  std::string rr = o.clusters.roi_radius == RoiRadius::kSphereBound ? "sphere-bound" : "farthest-point";
+  std::string rr =
+      o.clusters.roi_radius == RoiRadius::kSphereBound ? "sphere-bound" : "farthest-point";
   SVSLAM_TRY(r.read("clusters.roi_radius", rr, {"sphere-bound", "farthest-point"}));
-  o.clusters.roi_radius = rr == "sphere-bound" ? RoiRadius::kSphereBound : RoiRadius::kFarthestPoint;
+  o.clusters.roi_radius =
+      rr == "sphere-bound" ? RoiRadius::kSphereBound : RoiRadius::kFarthestPoint;
   SVSLAM_TRY(r.read("clusters.min_depth_m", o.clusters.min_depth_m, 1e-6, 1e6));
   SVSLAM_TRY(r.read("clusters.unknown_cell_px", o.clusters.unknown_cell_px, 4, 1024));
   SVSLAM_TRY(r.read("odometry.match_sigma_px", o.match_sigma_px, 0.01, 10));
@@ -188,14 +190,16 @@ Status parseRunConfig(const std::string& yaml_text, const std::string& name, Run
   return parse(*r, out);
 }
 
-Status loadRunConfig(const std::string& path, RunConfig& out) {
+Status loadRunConfig(const std::string& path, RunConfig& out, std::set<std::string>* changed_keys) {
   if (path.empty()) {
     ConfigReader r;
     return parse(r, out);
   }
   auto r = ConfigReader::fromFile(path);
   if (!r) return r.status();
-  return parse(*r, out);
+  const Status s = parse(*r, out);
+  if (changed_keys) *changed_keys = r->changedKeys();
+  return s;
 }
 
 }  // namespace svslam::config

@@ -3,11 +3,12 @@
 // optional; defaults are the struct defaults below and those of the component parameter
 // structs. Unknown keys and out-of-range values are rejected with a message naming the key.
 #include <cstdint>
+#include <set>
 #include <string>
 
 #include "core/status.hpp"
-#include "pipeline/config/pipeline_config.hpp"
 #include "odometry/stereo_odometry.hpp"
+#include "pipeline/config/pipeline_config.hpp"
 #include "slam/slam_system.hpp"
 
 namespace svslam::config {
@@ -25,8 +26,11 @@ struct RunConfig {
   ServiceConfig service;    // service.*: systemd life cycle
 };
 
-// Reads `path` (empty: defaults only) into `out`.
-Status loadRunConfig(const std::string& path, RunConfig& out);
+// Reads `path` (empty: defaults only) into `out`. With `changed_keys`, also the keys of the file
+// whose value differs from what `out` held (into a default RunConfig: the keys that change a
+// default).
+Status loadRunConfig(const std::string& path, RunConfig& out,
+                     std::set<std::string>* changed_keys = nullptr);
 // Same, from YAML text (tests).
 Status parseRunConfig(const std::string& yaml_text, const std::string& name, RunConfig& out);
 

@@ -50,11 +50,18 @@ Status ConfigReader::error(const std::string& key, const std::string& what) cons
   return Status::invalidArgument(name_ + ": key '" + key + "' " + what);
 }
 
-Status ConfigReader::read(const std::string& key, double& v, double min_value, double max_value) {
+template <typename T>
+void ConfigReader::assign(const std::string& key, T& v, const T& x) {
+  if (!(v == x)) changed_.insert(key);
+  v = x;
+}
+
+Status ConfigReader::readNumber(const std::string& key, bool& present, double& x, double min_value,
+                                double max_value) {
   const YAML::Node n = find(key);
   used_.insert(key);
-  if (!n.IsDefined()) return Status::ok();
-  double x = 0;
+  present = n.IsDefined();
+  if (!present) return Status::ok();
   if (!n.IsScalar() || !YAML::convert<double>::decode(n, x) || !std::isfinite(x))
     return error(key, "must be a finite number (got '" + (n.IsScalar() ? n.Scalar() : "?") + "')");
   if (x < min_value || x > max_value) {
@@ -62,14 +69,22 @@ Status ConfigReader::read(const std::string& key, double& v, double min_value, d
     ss << "= " << x << " is out of range [" << min_value << ", " << max_value << "]";
     return error(key, ss.str());
   }
-  v = x;
+  return Status::ok();
+}
+
+Status ConfigReader::read(const std::string& key, double& v, double min_value, double max_value) {
+  bool present = false;
+  double x = 0;
+  if (Status s = readNumber(key, present, x, min_value, max_value); !s) return s;
+  if (present) assign(key, v, x);
   return Status::ok();
 }
 
 Status ConfigReader::read(const std::string& key, float& v, double min_value, double max_value) {
-  double x = v;
-  if (Status s = read(key, x, min_value, max_value); !s) return s;
-  v = static_cast<float>(x);
+  bool present = false;
+  double x = 0;
+  if (Status s = readNumber(key, present, x, min_value, max_value); !s) return s;
+  if (present) assign(key, v, static_cast<float>(x));
   return Status::ok();
 }
 
@@ -81,9 +96,9 @@ Status ConfigReader::read(const std::string& key, int& v, int min_value, int max
   if (!n.IsScalar() || !YAML::convert<long long>::decode(n, x))
     return error(key, "must be an integer (got '" + (n.IsScalar() ? n.Scalar() : "?") + "')");
   if (x < min_value || x > max_value)
-    return error(key, "= " + std::to_string(x) + " is out of range [" +
-                          std::to_string(min_value) + ", " + std::to_string(max_value) + "]");
-  v = static_cast<int>(x);
+    return error(key, "= " + std::to_string(x) + " is out of range [" + std::to_string(min_value) +
+                          ", " + std::to_string(max_value) + "]");
+  assign(key, v, static_cast<int>(x));
   return Status::ok();
 }
 
@@ -95,7 +110,7 @@ Status ConfigReader::read(const std::string& key, std::uint64_t& v) {
   if (!n.IsScalar() || n.Scalar().empty() || n.Scalar()[0] == '-' ||
       !YAML::convert<unsigned long long>::decode(n, x))
     return error(key, "must be a non-negative integer");
-  v = x;
+  assign(key, v, static_cast<std::uint64_t>(x));
   return Status::ok();
 }
 
@@ -106,7 +121,7 @@ Status ConfigReader::read(const std::string& key, bool& v) {
   bool x = false;
   if (!n.IsScalar() || !YAML::convert<bool>::decode(n, x))
     return error(key, "must be true or false");
-  v = x;
+  assign(key, v, x);
   return Status::ok();
 }
 
@@ -126,7 +141,7 @@ Status ConfigReader::read(const std::string& key, std::string& v,
     }
     if (!ok) return error(key, "= '" + x + "' is not one of: " + list);
   }
-  v = x;
+  assign(key, v, x);
   return Status::ok();
 }
 
@@ -142,7 +157,7 @@ Status ConfigReader::read(const std::string& key, std::vector<double>& v) {
       return error(key, "must be a list of finite numbers");
     x.push_back(d);
   }
-  v = x;
+  assign(key, v, x);
   return Status::ok();
 }
 

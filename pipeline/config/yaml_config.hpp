@@ -40,6 +40,9 @@ class ConfigReader {
   Status read(const std::string& key, std::vector<double>& v);
 
   bool has(const std::string& key) const;
+  // Keys of the file whose value differed from the target's value before the read (read into
+  // defaults: the keys that change a default), in key order.
+  const std::set<std::string>& changedKeys() const { return changed_; }
   // The first key present in the file and never read, as an error; ok when none.
   Status finish() const;
   const std::string& name() const { return name_; }
@@ -47,9 +50,16 @@ class ConfigReader {
  private:
   YAML::Node find(const std::string& key) const;  // undefined node when absent
   Status error(const std::string& key, const std::string& what) const;
+  // The number at `key` checked against [min_value, max_value]; present = false when absent.
+  Status readNumber(const std::string& key, bool& present, double& x, double min_value,
+                    double max_value);
+  // v = x, noting `key` in changed_ when the value differs.
+  template <typename T>
+  void assign(const std::string& key, T& v, const T& x);
   YAML::Node root_;
   std::string name_;
   std::set<std::string> used_;
+  std::set<std::string> changed_;
 };
 
 }  // namespace svslam::config

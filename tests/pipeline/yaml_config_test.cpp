@@ -1,12 +1,15 @@
 // Strict YAML configuration: defaults, overrides, and an error naming the key for every kind of
 // bad entry (unknown key, wrong type, out of range, not YAML).
+#include "pipeline/config/yaml_config.hpp"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <set>
 #include <string>
+#include <vector>
 
 #include "pipeline/config/run_config.hpp"
-#include "pipeline/config/yaml_config.hpp"
 
 using svslam::config::ConfigReader;
 using svslam::config::parseRunConfig;
@@ -48,8 +51,9 @@ TEST(RunConfig, ValuesAreApplied) {
   EXPECT_FLOAT_EQ(c.odometry.stereo_match.min_zncc, 0.7f);
   EXPECT_EQ(c.odometry.stereo_match.sigma_mode, svslam::StereoSigmaMode::kFixed);  // default
   RunConfig f;
-  ASSERT_TRUE(parseRunConfig("stereo_match: {sigma_mode: curvature, sigma_d_px: 0.4}\n", "f.yaml", f)
-                  .isOk());
+  ASSERT_TRUE(
+      parseRunConfig("stereo_match: {sigma_mode: curvature, sigma_d_px: 0.4}\n", "f.yaml", f)
+          .isOk());
   EXPECT_EQ(f.odometry.stereo_match.sigma_mode, svslam::StereoSigmaMode::kCurvature);
   EXPECT_FLOAT_EQ(f.odometry.stereo_match.sigma_d_px, 0.4f);
   EXPECT_EQ(c.odometry.corners.response, svslam::CornerResponse::kShiTomasi);
@@ -111,6 +115,36 @@ TEST(RunConfig, ExampleConfigLoadsAtDefaults) {
   EXPECT_EQ(c.odometry.corners.max_per_cell, d.odometry.corners.max_per_cell);
   EXPECT_EQ(c.odometry.temporal_match.group_size, d.odometry.temporal_match.group_size);
   EXPECT_EQ(c.odometry.dense, d.odometry.dense);
+}
+
+TEST(RunConfig, ExampleConfigChangesNoDefault) {
+  // Every key of config/svslam.yaml must hold the code's default (the file documents them): a
+  // value that differs (stereo_match.refine_iterations was 6 against a default of 10) is named.
+  RunConfig c;
+  std::set<std::string> changed;
+  const std::string path = std::string(SVSLAM_SOURCE_DIR) + "/config/svslam.yaml";
+  ASSERT_TRUE(svslam::config::loadRunConfig(path, c, &changed).isOk());
+  std::string list;
+  for (const std::string& k : changed) list += " " + k;
+  EXPECT_TRUE(changed.empty()) << "keys that differ from the defaults:" << list;
+}
+
+TEST(ConfigReader, ChangedKeysAreThoseThatDifferFromTheTarget) {
+  auto r = ConfigReader::fromString("a: 0.8\nb: 3\nc: 0.25\nd: true\ne: x\nf: [1, 2]\n", "x");
+  ASSERT_TRUE(r.isOk());
+  float a = 0.8f;  // the same value through float: not a change
+  int b = 4;
+  double c = 0.25;
+  bool d = false;
+  std::string e = "x";
+  std::vector<double> f{1, 2};
+  ASSERT_TRUE(r->read("a", a, 0, 1).isOk());
+  ASSERT_TRUE(r->read("b", b, 0, 10).isOk());
+  ASSERT_TRUE(r->read("c", c, 0, 1).isOk());
+  ASSERT_TRUE(r->read("d", d).isOk());
+  ASSERT_TRUE(r->read("e", e).isOk());
+  ASSERT_TRUE(r->read("f", f).isOk());
+  EXPECT_EQ(r->changedKeys(), (std::set<std::string>{"b", "d"}));
 }
 
 TEST(ConfigReader, TypedReads) {
