@@ -4,8 +4,8 @@
 // optimal-gain form) beside a naive dense textbook EKF (full F, dense H,
 // P = (I - K H) P (I - K H)^T + K R K^T) in the same binary. One thread, except
 // joseph_2threads: the update's products split in row pieces on a two-thread pool
-// (bit-identical results). BM_Ekf_svslam_default: the SLAM's default configuration (120
-// landmarks, up to 100 observations a frame, batches of 16; EkfSlamParams{}) with 30, 60 and 100
+// (bit-identical results). BM_Ekf_svslam_default: the SLAM's default configuration (140
+// landmarks, up to 60 observations a frame, batches of 16; EkfSlamParams{}) with 30, 60 and 100
 // observations. Also the n x n product alone per matrix backend beside Eigen's.
 // Prints ms per frame and the ratio svslam / dense at the end.
 #include <benchmark/benchmark.h>

@@ -70,11 +70,11 @@ struct EkfSlamParams {
   // Cost of an update with k observations in batches of b, n = 6 + 3 N (N landmarks), m = 3 b:
   // per batch n^2 m (the n x n product, lower triangle of a rank-2m update) + 2 n m^2 (gain and
   // its round-off D) + O(m^3), i.e. 3 k (n^2 + 2 n m) multiply-adds in all: the state size, not
-  // the batch, sets the cost, and small batches avoid the n m^2 terms. The defaults (120
-  // landmarks, batches of 16) keep 100 observations a frame about as cheap as 30 with 300
-  // landmarks (about 50M multiply-adds; bench/bench_ekf measures both).
-  int max_landmarks = 120;          // landmarks in the state at once, [1, 3000]; P storage of
-                                    // (6 + 3 max)^2 doubles is preallocated (120: 1.1 MB)
+  // the batch, sets the cost, and small batches avoid the n m^2 terms. The defaults (140
+  // landmarks, batches of 16) with the SLAM's 60 observations a frame cost about 40M
+  // multiply-adds, half of 300 landmarks observed 30 times (bench/bench_ekf measures both).
+  int max_landmarks = 140;          // landmarks in the state at once, [1, 3000]; P storage of
+                                    // (6 + 3 max)^2 doubles is preallocated (140: 1.5 MB)
   int max_batch_observations = 16;  // observations stacked in one update, [1, 1000]; more
                                     // accepted observations are applied in successive batches
   double gate_chi2 = 11.34;         // Mahalanobis d^2 threshold, chi-square with 3 dof
@@ -82,8 +82,8 @@ struct EkfSlamParams {
   bool joseph_form = true;   // Joseph-form covariance update; false: optimal-gain form P - B B^T
   int max_update_tasks = 2;  // row pieces the update's products are split into on the executor
                              // given to update(), [1, 16]; each piece has its own preallocated
-                             // workspace of (2 n_max + 32) 2 m_max doubles (120 landmarks and
-                             // batches of 16: 0.6 MB). Results do not depend on it.
+                             // workspace of (2 n_max + 32) 2 m_max doubles (140 landmarks and
+                             // batches of 16: 0.7 MB). Results do not depend on it.
   Status validate() const;
 };
 

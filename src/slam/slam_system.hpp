@@ -66,7 +66,7 @@ struct SlamSystemParams {
   double track_tolerance_px = 1.5;              // consecutive frames (seed: 1.5 px)
   double reperception_tolerance_px = 2.5;       // (seed: about 2.5 px)
   int max_reperceptions = 10;                   // re-perception searches per frame, >= 0
-  int max_observations = 80;  // landmark observations per frame, >= 1: seed 001 updates with
+  int max_observations = 60;  // landmark observations per frame, >= 1: seed 001 updates with
                               // every landmark matched; this only bounds the update cost
   double landmark_exclusion_px = 2.0;        // see step 2, px, >= 0
   double reperception_max_radius_px = 60.0;  // cap of the search radius, px
