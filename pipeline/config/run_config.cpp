@@ -192,6 +192,7 @@ Status parseRunConfig(const std::string& yaml_text, const std::string& name, Run
 
 Status loadRunConfig(const std::string& path, RunConfig& out, std::set<std::string>* changed_keys) {
   if (path.empty()) {
+    if (changed_keys) changed_keys->clear();  // no file: nothing changes a default
     ConfigReader r;
     return parse(r, out);
   }
