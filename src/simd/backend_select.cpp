@@ -19,7 +19,8 @@ bool backendAvailable(Backend b) {
     case Backend::kAvx512:
       // The AVX-512 backend uses F + BW + VL and the VPOPCNTDQ extension (Ice Lake, Zen 4).
       return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
-             __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512vpopcntdq");
+             __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512vpopcntdq") &&
+             __builtin_cpu_supports("avx512bitalg");
 #endif
 #if defined(SVSLAM_HAVE_NEON)
     case Backend::kNeon:

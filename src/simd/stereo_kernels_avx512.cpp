@@ -1,4 +1,4 @@
-// AVX-512 (F, BW, VL, VPOPCNTDQ) backend of the stereo row kernels. Compiled with its own
+// AVX-512 (F, BW, VL, VPOPCNTDQ, BITALG) backend of the stereo row kernels. Compiled with its own
 // instruction-set flags and selected at run time; bit-exact with stereo_kernels_scalar.cpp.
 // Vector bodies work on 32 x uint16 or 64 x uint8 columns; tails use masked loads and stores, or
 // (for the per-column kernels) the scalar reference at an offset.
@@ -78,7 +78,49 @@ void censusRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int wi
   if (x < width) scalarKernels().censusRow(win + x, stride, width - x, win_w, win_h, out + x);
 }
 
-inline __mmask32 tailMask32(int n) { return n >= 32 ? 0xFFFFFFFFu : ((1u << n) - 1u); }
+inline __mmask32 tailMask32(int n) {
+  return n >= 32 ? 0xFFFFFFFFu : (n <= 0 ? 0u : ((1u << n) - 1u));
+}
+inline __mmask64 tailMask64(int n) {
+  return n >= 64 ? ~__mmask64{0} : (n <= 0 ? __mmask64{0} : ((__mmask64{1} << n) - 1u));
+}
+
+// Byte-plane Hamming costs of 64 pixels per step (StereoKernels::censusPlanesCostRows): the
+// left planes stay in registers across the disparities; per plane one xor and one byte
+// population count (VPOPCNTB), summed in bytes (at most 64, no overflow). The ragged end uses
+// masked loads and stores (masked-out lanes are never read).
+template <int NP>
+void censusPlanesCostT(const std::uint8_t* left, const std::uint8_t* right,
+                       std::ptrdiff_t plane_stride, int width, int d_first, int n_d,
+                       std::uint8_t* cost, std::ptrdiff_t cost_stride) {
+  for (int x = 0; x < width; x += 64) {
+    const __mmask64 m = tailMask64(width - x);
+    __m512i l[NP];
+    for (int j = 0; j < NP; ++j) l[j] = _mm512_maskz_loadu_epi8(m, left + j * plane_stride + x);
+    const std::uint8_t* r = right + x - d_first;
+    std::uint8_t* out = cost + x;
+    for (int k = 0; k < n_d; ++k, --r, out += cost_stride) {
+      __m512i acc = _mm512_popcnt_epi8(_mm512_xor_si512(l[0], _mm512_maskz_loadu_epi8(m, r)));
+      for (int j = 1; j < NP; ++j)
+        acc = _mm512_add_epi8(acc, _mm512_popcnt_epi8(_mm512_xor_si512(
+                                       l[j], _mm512_maskz_loadu_epi8(m, r + j * plane_stride))));
+      _mm512_mask_storeu_epi8(out, m, acc);
+    }
+  }
+}
+
+using PlanesCostFn = void (*)(const std::uint8_t*, const std::uint8_t*, std::ptrdiff_t, int, int,
+                              int, std::uint8_t*, std::ptrdiff_t);
+constexpr PlanesCostFn kPlanesCostFns[8] = {
+    &censusPlanesCostT<1>, &censusPlanesCostT<2>, &censusPlanesCostT<3>, &censusPlanesCostT<4>,
+    &censusPlanesCostT<5>, &censusPlanesCostT<6>, &censusPlanesCostT<7>, &censusPlanesCostT<8>};
+
+void censusPlanesCostRows(const std::uint8_t* left, const std::uint8_t* right,
+                          std::ptrdiff_t plane_stride, int n_planes, int width, int d_first,
+                          int n_d, std::uint8_t* cost, std::ptrdiff_t cost_stride) {
+  kPlanesCostFns[n_planes - 1](left, right, plane_stride, width, d_first, n_d, cost,
+                               cost_stride);
+}
 
 void censusCostRow(const std::uint64_t* left, const std::uint64_t* right, int width, int d,
                    std::uint8_t* cost) {
@@ -130,7 +172,7 @@ void addSubRow(std::uint16_t* acc, const std::uint8_t* add, const std::uint8_t* 
 
 // 256-bit loads: a misaligned 512-bit load always splits across two cache lines, a 256-bit one
 // only every other time, and the sum is load-bound.
-void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
+void boxRowDirect(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
   int x = 0;
   for (; x + 32 <= width; x += 32) {
     __m256i s0 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in + x));
@@ -144,6 +186,43 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x + 16), s1);
   }
   if (x < width) scalarKernels().boxRow(in + x, width - x, win_w, out + x);
+}
+
+// A window of 3 q columns (q >= 2) as q sums of 3: t[j] = in[j] + in[j + 1] + in[j + 2], then
+// out[x] = t[x] + t[x + 3] + ... + t[x + 3 (q - 1)] (the same sums mod 2^16, in another order):
+// 6 loads and 4 adds per 32 outputs for 9 columns instead of 9 and 8. t goes through a stack
+// buffer, a chunk of the row at a time, so its loads come long after its stores (no
+// store-forwarding stalls on the overlapping reads); the ends are masked.
+void boxRowThrees(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
+  constexpr int kChunk = 1024;
+  alignas(64) std::uint16_t t[kChunk + 64];
+  const int q = win_w / 3;
+  for (int c0 = 0; c0 < width; c0 += kChunk) {
+    const int n = std::min(kChunk, width - c0);
+    const int nt = n + win_w - 3;  // t[0 .. nt): in[c0 .. c0 + n + win_w - 1) is readable
+    const std::uint16_t* src = in + c0;
+    for (int j = 0; j < nt; j += 32) {
+      const __mmask32 m = tailMask32(nt - j);
+      const __m512i s3 = _mm512_add_epi16(
+          _mm512_add_epi16(_mm512_maskz_loadu_epi16(m, src + j),
+                           _mm512_maskz_loadu_epi16(m, src + j + 1)),
+          _mm512_maskz_loadu_epi16(m, src + j + 2));
+      _mm512_store_si512(t + j, s3);
+    }
+    for (int x = 0; x < n; x += 32) {
+      const __mmask32 m = tailMask32(n - x);
+      __m512i acc = _mm512_maskz_loadu_epi16(m, t + x);
+      for (int k = 1; k < q; ++k)
+        acc = _mm512_add_epi16(acc, _mm512_maskz_loadu_epi16(m, t + x + 3 * k));
+      _mm512_mask_storeu_epi16(out + c0 + x, m, acc);
+    }
+  }
+}
+
+void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
+  // (t's buffer holds a chunk plus 64 columns: windows up to 33 columns.)
+  if (win_w >= 6 && win_w <= 33 && win_w % 3 == 0) return boxRowThrees(in, width, win_w, out);
+  boxRowDirect(in, width, win_w, out);
 }
 
 // The left-image state of 32 columns stays in registers across the planes of a block; updates
@@ -207,25 +286,24 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
     store(x, l);
   }
   wtaLeftTail(agg, stride, n_planes, i0, x, width, s);
-  for (int p = 0; p < n_planes; ++p) {
-    const int off = d0 + i0 + p;
-    const std::uint16_t* a = agg + p * stride + off;
-    const __m256i vi = _mm256_set1_epi16(static_cast<short>(i0 + p));
-    const int n_right = width - off;
-    int xr = 0;
-    // 256-bit: the candidate row is misaligned by d, see boxRow.
-    for (; xr + 16 <= n_right; xr += 16) {
-      const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + xr));
-      const __m256i br = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(s_best_r + xr));
-      const __mmask16 upd = _mm256_cmplt_epu16_mask(c, br);
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(s_best_r + xr),
-                          _mm256_mask_mov_epi16(br, upd, c));
-      _mm256_storeu_si256(
-          reinterpret_cast<__m256i*>(s_idx_r + xr),
-          _mm256_mask_mov_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(s_idx_r + xr)),
-                                upd, vi));
+  // Right image: 32 right pixels keep their state in registers across the block's planes.
+  // Plane p's candidates for right pixels [0, n_right(p)) are its costs at x = xr + d0 + i0 + p,
+  // n_right(p) = width - d0 - i0 - p (fewer for later planes: masked lanes take no part).
+  const int n_right0 = width - d0 - i0;
+  for (int xr = 0; xr < n_right0; xr += 32) {
+    const __mmask32 m_blk = tailMask32(n_right0 - xr);
+    __m512i br = _mm512_maskz_loadu_epi16(m_blk, s_best_r + xr);
+    __m512i ir = _mm512_maskz_loadu_epi16(m_blk, s_idx_r + xr);
+    const std::uint16_t* a = agg + d0 + i0 + xr;
+    for (int p = 0; p < n_planes; ++p, a += stride + 1) {
+      const __mmask32 m = tailMask32(n_right0 - p - xr);
+      const __m512i c = _mm512_maskz_loadu_epi16(m, a);
+      const __mmask32 upd = _mm512_mask_cmplt_epu16_mask(m, c, br);
+      br = _mm512_mask_mov_epi16(br, upd, c);
+      ir = _mm512_mask_mov_epi16(ir, upd, _mm512_set1_epi16(static_cast<short>(i0 + p)));
     }
-    wtaRightTail(a, xr, n_right, i0 + p, s);
+    _mm512_mask_storeu_epi16(s_best_r + xr, m_blk, br);
+    _mm512_mask_storeu_epi16(s_idx_r + xr, m_blk, ir);
   }
 }
 
@@ -242,7 +320,8 @@ void wtaNeighboursScalar(const std::uint16_t* agg, std::ptrdiff_t stride, int nu
 const StereoKernels& avx512Kernels() {
   static const StereoKernels k{Backend::kAvx512, "avx512",  censusRow, censusCostRow,
                                sadCostRow,       addSubRow, boxRow,    wtaUpdateRows,
-                               wtaNeighboursScalar, finalizeRowAvx2,  nullptr,   nullptr};
+                               wtaNeighboursScalar, finalizeRowAvx2,  censusPlanesRowAvx2,
+                               censusPlanesCostRows};
   return k;
 }
 

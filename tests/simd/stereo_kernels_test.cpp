@@ -192,8 +192,10 @@ TEST_P(StereoKernelsTest, AddSubRowMatchesScalar) {
 
 TEST_P(StereoKernelsTest, BoxRowMatchesScalar) {
   std::mt19937 rng(2024);
-  for (int width : kWidths) {
-    for (int win_w = 1; win_w <= 31; ++win_w) {
+  std::vector<int> widths(std::begin(kWidths), std::end(kWidths));
+  widths.insert(widths.end(), {1030, 2053});  // rows longer than a backend's chunk of work
+  for (int width : widths) {
+    for (int win_w = 1; win_w <= 36; ++win_w) {
       for (Dist dist : kDists) {
         // Readable: in[0, width + win_w - 1).
         const auto in = randomU16(static_cast<std::size_t>(width + win_w - 1), rng, dist);
