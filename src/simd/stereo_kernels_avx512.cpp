@@ -225,102 +225,12 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
   boxRowDirect(in, width, win_w, out);
 }
 
-// The left-image state of 32 columns stays in registers across the planes of a block; updates
-// are branch-free blends. The ragged end goes through the scalar reference on a sub-range.
-void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int width,
-                   int d0, const WtaRowState& s) {
-  std::uint16_t* const s_best = s.best;
-  std::int16_t* const s_bidx = s.bidx;
-  std::uint16_t* const s_second = s.second;
-  std::uint16_t* const s_cm = s.cm;
-  std::uint16_t* const s_cp = s.cp;
-  std::uint16_t* const s_pm1 = s.pm1;
-  std::uint16_t* const s_pm2 = s.pm2;
-  std::uint16_t* const s_best_r = s.best_r;
-  std::int16_t* const s_idx_r = s.idx_r;
-  const __m512i ones = _mm512_set1_epi16(-1);
-  // One WTA step of 32 columns: the state update of the scalar reference, as blends.
-  struct Lanes {
-    __m512i best, bidx, second, cm, cp, pm1, pm2, prev;
-  };
-  auto load = [&](int x) {
-    return Lanes{_mm512_loadu_si512(s_best + x),   _mm512_loadu_si512(s_bidx + x),
-                 _mm512_loadu_si512(s_second + x), _mm512_loadu_si512(s_cm + x),
-                 _mm512_loadu_si512(s_cp + x),     _mm512_loadu_si512(s_pm1 + x),
-                 _mm512_loadu_si512(s_pm2 + x),    _mm512_loadu_si512(agg - stride + x)};
-  };
-  auto store = [&](int x, const Lanes& l) {
-    _mm512_storeu_si512(s_best + x, l.best);
-    _mm512_storeu_si512(s_bidx + x, l.bidx);
-    _mm512_storeu_si512(s_second + x, l.second);
-    _mm512_storeu_si512(s_cm + x, l.cm);
-    _mm512_storeu_si512(s_cp + x, l.cp);
-    _mm512_storeu_si512(s_pm1 + x, l.pm1);
-    _mm512_storeu_si512(s_pm2 + x, l.pm2);
-  };
-  // Loop-carried values change through min or a blend only (1-cycle latency); the compares
-  // that decide the blends read the previous state but do not feed back into each other.
-  auto step = [&](Lanes& l, const __m512i c, const __m512i vi, const __m512i vi_minus1) {
-    const __mmask32 m_new = _mm512_cmplt_epu16_mask(c, l.best);
-    const __mmask32 m_adj =
-        _mm512_mask_cmpeq_epi16_mask(static_cast<__mmask32>(~m_new), l.bidx, vi_minus1);
-    const __mmask32 keep = static_cast<__mmask32>(~(m_new | m_adj));
-    l.second =
-        _mm512_mask_mov_epi16(_mm512_mask_min_epu16(l.second, keep, l.second, c), m_new, l.pm2);
-    l.best = _mm512_min_epu16(l.best, c);
-    l.bidx = _mm512_mask_mov_epi16(l.bidx, m_new, vi);
-    l.cm = _mm512_mask_mov_epi16(l.cm, m_new, l.prev);
-    l.cp = _mm512_mask_mov_epi16(_mm512_mask_mov_epi16(l.cp, m_new, ones), m_adj, c);
-    l.pm2 = l.pm1;
-    l.pm1 = _mm512_min_epu16(l.pm1, c);
-    l.prev = c;
-  };
-  // (Interleaving 2-4 column groups was measured slower here: the step is throughput-bound.)
-  int x = 0;
-  for (; x + 32 <= width; x += 32) {
-    Lanes l = load(x);
-    for (int p = 0; p < n_planes; ++p)
-      step(l, _mm512_loadu_si512(agg + p * stride + x),
-           _mm512_set1_epi16(static_cast<short>(i0 + p)),
-           _mm512_set1_epi16(static_cast<short>(i0 + p - 1)));
-    store(x, l);
-  }
-  wtaLeftTail(agg, stride, n_planes, i0, x, width, s);
-  // Right image: 32 right pixels keep their state in registers across the block's planes.
-  // Plane p's candidates for right pixels [0, n_right(p)) are its costs at x = xr + d0 + i0 + p,
-  // n_right(p) = width - d0 - i0 - p (fewer for later planes: masked lanes take no part).
-  const int n_right0 = width - d0 - i0;
-  for (int xr = 0; xr < n_right0; xr += 32) {
-    const __mmask32 m_blk = tailMask32(n_right0 - xr);
-    __m512i br = _mm512_maskz_loadu_epi16(m_blk, s_best_r + xr);
-    __m512i ir = _mm512_maskz_loadu_epi16(m_blk, s_idx_r + xr);
-    const std::uint16_t* a = agg + d0 + i0 + xr;
-    for (int p = 0; p < n_planes; ++p, a += stride + 1) {
-      const __mmask32 m = tailMask32(n_right0 - p - xr);
-      const __m512i c = _mm512_maskz_loadu_epi16(m, a);
-      const __mmask32 upd = _mm512_mask_cmplt_epu16_mask(m, c, br);
-      br = _mm512_mask_mov_epi16(br, upd, c);
-      ir = _mm512_mask_mov_epi16(ir, upd, _mm512_set1_epi16(static_cast<short>(i0 + p)));
-    }
-    _mm512_mask_storeu_epi16(s_best_r + xr, m_blk, br);
-    _mm512_mask_storeu_epi16(s_idx_r + xr, m_blk, ir);
-  }
-}
-
-}  // namespace
-
-namespace {
-// cm / cp from the stored planes: per pixel, not per pixel-disparity, so the reference.
-void wtaNeighboursScalar(const std::uint16_t* agg, std::ptrdiff_t stride, int num_disp, int width,
-                         const WtaRowState& s) {
-  wtaNeighboursRange(agg, stride, num_disp, 0, width, s);
-}
 }  // namespace
 
 const StereoKernels& avx512Kernels() {
   static const StereoKernels k{Backend::kAvx512, "avx512",  censusRow, censusCostRow,
-                               sadCostRow,       addSubRow, boxRow,    wtaUpdateRows,
-                               wtaNeighboursScalar, finalizeRowAvx2,  censusPlanesRowAvx2,
+                               sadCostRow,       addSubRow, boxRow,    wtaUpdateRowsAvx2,
+                               wtaNeighboursAvx2, finalizeRowAvx2,  censusPlanesRowAvx2,
                                censusPlanesCostRows};
   return k;
 }
