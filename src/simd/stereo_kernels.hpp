@@ -162,9 +162,7 @@ void finalizeRowAvx2(const WtaRowState& s, const std::uint8_t* low_texture, int 
 // too: a misaligned 512-bit load always splits across cache lines on Zen 4).
 void censusPlanesRowAvx2(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
                          int win_h, std::uint8_t* out, std::ptrdiff_t plane_stride);
-// The AVX2 winner-take-all kernels (StereoKernels::wtaUpdateRows, ::wtaNeighbours).
-void wtaUpdateRowsAvx2(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0,
-                       int width, int d0, const WtaRowState& s);
+// The AVX2 StereoKernels::wtaNeighbours (gathers), shared with the AVX-512 table.
 void wtaNeighboursAvx2(const std::uint16_t* agg, std::ptrdiff_t stride, int num_disp, int width,
                        const WtaRowState& s);
 #endif

@@ -161,11 +161,6 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
 
 namespace svslam::simd {
 
-void wtaUpdateRowsAvx2(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0,
-                       int width, int d0, const WtaRowState& s) {
-  avx2_detail::wtaUpdateRows(agg, stride, n_planes, i0, width, d0, s);
-}
-
 void wtaNeighboursAvx2(const std::uint16_t* agg, std::ptrdiff_t stride, int num_disp, int width,
                        const WtaRowState& s) {
   avx2_detail::wtaNeighbours(agg, stride, num_disp, width, s);

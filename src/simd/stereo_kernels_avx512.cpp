@@ -225,11 +225,100 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
   boxRowDirect(in, width, win_w, out);
 }
 
+
+// Winner-take-all, the AVX2 kernels' scheme on 32 lanes (stereo_kernels_avx2_wta.cpp): the left
+// state of 32 columns stays in registers across the planes, cm / cp are left to wtaNeighbours;
+// with bidx1 = bidx + 1 and vi = i:
+//   lt = c < best; adj = (bidx1 == vi) on the old bidx
+//   second = lt ? pm2 : (adj ? second : min(second, c)); bidx1 = lt ? i + 1 : bidx1
+// Two planes per iteration, so the rotation pm2 <- pm1 needs no register copies.
+inline void wtaLeftBlock512(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0,
+                            std::uint16_t* best_p, std::int16_t* bidx_p, std::uint16_t* second_p,
+                            std::uint16_t* pm1_p, std::uint16_t* pm2_p) {
+  const __m512i one = _mm512_set1_epi16(1);
+  __m512i best = _mm512_loadu_si512(best_p);
+  __m512i second = _mm512_loadu_si512(second_p);
+  __m512i pm1 = _mm512_loadu_si512(pm1_p);
+  __m512i pm2 = _mm512_loadu_si512(pm2_p);
+  __m512i bidx1 = _mm512_add_epi16(_mm512_loadu_si512(bidx_p), one);
+  __m512i vi = _mm512_set1_epi16(static_cast<short>(i0));
+  const auto step = [&](__m512i c) {
+    const __m512i vn = _mm512_add_epi16(vi, one);
+    const __mmask32 lt = _mm512_cmplt_epu16_mask(c, best);
+    const __mmask32 nadj = _mm512_cmpneq_epi16_mask(bidx1, vi);
+    second = _mm512_mask_mov_epi16(_mm512_mask_min_epu16(second, nadj, second, c), lt, pm2);
+    bidx1 = _mm512_mask_mov_epi16(bidx1, lt, vn);
+    best = _mm512_min_epu16(best, c);
+    pm2 = pm1;
+    pm1 = _mm512_min_epu16(pm1, c);
+    vi = vn;
+  };
+  const std::uint16_t* a = agg;
+  int p = 0;
+  for (; p + 2 <= n_planes; p += 2, a += 2 * stride) {
+    step(_mm512_loadu_si512(a));
+    step(_mm512_loadu_si512(a + stride));
+  }
+  if (p < n_planes) step(_mm512_loadu_si512(a));
+  _mm512_storeu_si512(best_p, best);
+  _mm512_storeu_si512(second_p, second);
+  _mm512_storeu_si512(pm1_p, pm1);
+  _mm512_storeu_si512(pm2_p, pm2);
+  _mm512_storeu_si512(bidx_p, _mm512_sub_epi16(bidx1, one));
+}
+
+void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes, int i0, int width,
+                   int d0, const WtaRowState& s) {
+  if (n_planes <= 0) return;
+  int x = 0;
+  for (; x + 32 <= width; x += 32)
+    wtaLeftBlock512(agg + x, stride, n_planes, i0, s.best + x, s.bidx + x, s.second + x,
+                    s.pm1 + x, s.pm2 + x);
+  if (x < width) wtaLeftTail(agg, stride, n_planes, i0, x, width, s);
+  // Right image: plane i's candidate for right pixel xr is agg_i[xr + d0 + i]; strictly smaller
+  // wins. Right pixels [0, n_right(p)), n_right(p) = width - d0 - i0 - p; 32 of them keep
+  // best_r / idx_r in registers across the block's planes, lanes past a plane's end masked.
+  const int n_right0 = width - d0 - i0;
+  const __m512i one = _mm512_set1_epi16(1);
+  for (int xr = 0; xr < n_right0; xr += 32) {
+    const __mmask32 m_blk = tailMask32(n_right0 - xr);
+    __m512i br = _mm512_maskz_loadu_epi16(m_blk, s.best_r + xr);
+    __m512i ir = _mm512_maskz_loadu_epi16(m_blk, s.idx_r + xr);
+    __m512i vi = _mm512_set1_epi16(static_cast<short>(i0));
+    const std::uint16_t* a = agg + d0 + i0 + xr;
+    if (xr + 32 + n_planes - 1 <= n_right0) {  // every lane in every plane
+      const auto step = [&](const std::uint16_t* q) {
+        const __m512i c = _mm512_loadu_si512(q);
+        ir = _mm512_mask_mov_epi16(ir, _mm512_cmplt_epu16_mask(c, br), vi);
+        br = _mm512_min_epu16(br, c);
+        vi = _mm512_add_epi16(vi, one);
+      };
+      int p = 0;
+      for (; p + 2 <= n_planes; p += 2, a += 2 * (stride + 1)) {
+        step(a);
+        step(a + stride + 1);
+      }
+      if (p < n_planes) step(a);
+    } else {
+      for (int p = 0; p < n_planes; ++p, a += stride + 1) {
+        const __mmask32 m = tailMask32(n_right0 - p - xr);
+        const __m512i c = _mm512_maskz_loadu_epi16(m, a);
+        const __mmask32 upd = _mm512_mask_cmplt_epu16_mask(m, c, br);
+        br = _mm512_mask_mov_epi16(br, upd, c);
+        ir = _mm512_mask_mov_epi16(ir, upd, vi);
+        vi = _mm512_add_epi16(vi, one);
+      }
+    }
+    _mm512_mask_storeu_epi16(s.best_r + xr, m_blk, br);
+    _mm512_mask_storeu_epi16(s.idx_r + xr, m_blk, ir);
+  }
+}
+
 }  // namespace
 
 const StereoKernels& avx512Kernels() {
   static const StereoKernels k{Backend::kAvx512, "avx512",  censusRow, censusCostRow,
-                               sadCostRow,       addSubRow, boxRow,    wtaUpdateRowsAvx2,
+                               sadCostRow,       addSubRow, boxRow,    wtaUpdateRows,
                                wtaNeighboursAvx2, finalizeRowAvx2,  censusPlanesRowAvx2,
                                censusPlanesCostRows};
   return k;
