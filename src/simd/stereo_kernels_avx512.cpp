@@ -1,7 +1,10 @@
-// AVX-512 (F, BW, VL, VPOPCNTDQ, BITALG) backend of the stereo row kernels. Compiled with its own
-// instruction-set flags and selected at run time; bit-exact with stereo_kernels_scalar.cpp.
+// AVX-512 (F, BW, VL, VPOPCNTDQ, BITALG) backend of the stereo row kernels. Compiled with its
+// own instruction-set flags and selected at run time; bit-exact with stereo_kernels_scalar.cpp.
 // Vector bodies work on 32 x uint16 or 64 x uint8 columns; tails use masked loads and stores, or
-// (for the per-column kernels) the scalar reference at an offset.
+// (for the per-column kernels) the scalar reference at an offset. The byte-plane census
+// transform, the neighbour look-ups (gathers) and finalizeRow are the AVX2 kernels (256-bit is
+// as fast there: the census window loads are misaligned, and a misaligned 512-bit load always
+// splits across cache lines on Zen 4).
 #include <immintrin.h>
 
 #include <algorithm>
@@ -118,8 +121,7 @@ constexpr PlanesCostFn kPlanesCostFns[8] = {
 void censusPlanesCostRows(const std::uint8_t* left, const std::uint8_t* right,
                           std::ptrdiff_t plane_stride, int n_planes, int width, int d_first,
                           int n_d, std::uint8_t* cost, std::ptrdiff_t cost_stride) {
-  kPlanesCostFns[n_planes - 1](left, right, plane_stride, width, d_first, n_d, cost,
-                               cost_stride);
+  kPlanesCostFns[n_planes - 1](left, right, plane_stride, width, d_first, n_d, cost, cost_stride);
 }
 
 void censusCostRow(const std::uint64_t* left, const std::uint64_t* right, int width, int d,
@@ -203,10 +205,10 @@ void boxRowThrees(const std::uint16_t* in, int width, int win_w, std::uint16_t* 
     const std::uint16_t* src = in + c0;
     for (int j = 0; j < nt; j += 32) {
       const __mmask32 m = tailMask32(nt - j);
-      const __m512i s3 = _mm512_add_epi16(
-          _mm512_add_epi16(_mm512_maskz_loadu_epi16(m, src + j),
-                           _mm512_maskz_loadu_epi16(m, src + j + 1)),
-          _mm512_maskz_loadu_epi16(m, src + j + 2));
+      const __m512i s3 =
+          _mm512_add_epi16(_mm512_add_epi16(_mm512_maskz_loadu_epi16(m, src + j),
+                                            _mm512_maskz_loadu_epi16(m, src + j + 1)),
+                           _mm512_maskz_loadu_epi16(m, src + j + 2));
       _mm512_store_si512(t + j, s3);
     }
     for (int x = 0; x < n; x += 32) {
@@ -224,7 +226,6 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
   if (win_w >= 6 && win_w <= 33 && win_w % 3 == 0) return boxRowThrees(in, width, win_w, out);
   boxRowDirect(in, width, win_w, out);
 }
-
 
 // Winner-take-all, the AVX2 kernels' scheme on 32 lanes (stereo_kernels_avx2_wta.cpp): the left
 // state of 32 columns stays in registers across the planes, cm / cp are left to wtaNeighbours;
@@ -272,8 +273,8 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
   if (n_planes <= 0) return;
   int x = 0;
   for (; x + 32 <= width; x += 32)
-    wtaLeftBlock512(agg + x, stride, n_planes, i0, s.best + x, s.bidx + x, s.second + x,
-                    s.pm1 + x, s.pm2 + x);
+    wtaLeftBlock512(agg + x, stride, n_planes, i0, s.best + x, s.bidx + x, s.second + x, s.pm1 + x,
+                    s.pm2 + x);
   if (x < width) wtaLeftTail(agg, stride, n_planes, i0, x, width, s);
   // Right image: plane i's candidate for right pixel xr is agg_i[xr + d0 + i]; strictly smaller
   // wins. Right pixels [0, n_right(p)), n_right(p) = width - d0 - i0 - p; 32 of them keep
@@ -317,9 +318,17 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
 }  // namespace
 
 const StereoKernels& avx512Kernels() {
-  static const StereoKernels k{Backend::kAvx512, "avx512",  censusRow, censusCostRow,
-                               sadCostRow,       addSubRow, boxRow,    wtaUpdateRows,
-                               wtaNeighboursAvx2, finalizeRowAvx2,  censusPlanesRowAvx2,
+  static const StereoKernels k{Backend::kAvx512,
+                               "avx512",
+                               censusRow,
+                               censusCostRow,
+                               sadCostRow,
+                               addSubRow,
+                               boxRow,
+                               wtaUpdateRows,
+                               wtaNeighboursAvx2,
+                               finalizeRowAvx2,
+                               censusPlanesRowAvx2,
                                censusPlanesCostRows};
   return k;
 }
