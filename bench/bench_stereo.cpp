@@ -65,8 +65,11 @@ void setCounters(benchmark::State& st, int w, int h, int ndisp) {
   st.counters["disparities"] = ndisp;
 }
 
-// args: width, height, disparities, threads
-void BM_Svslam(benchmark::State& st, svslam::MatchingCost cost) {
+// Row stripes per thread of the two-thread cases (more stripes balance a noisy core's delay,
+// each costs a warm-up of window_h cost rows); BM_SvslamStripes compares the choices.
+constexpr int kStripesPerThread = 4;
+
+void runSvslam(benchmark::State& st, svslam::MatchingCost cost, int per_thread) {
   const int w = static_cast<int>(st.range(0)), h = static_cast<int>(st.range(1));
   const int nd = static_cast<int>(st.range(2)), threads = static_cast<int>(st.range(3));
   const Pair& p = pairOfSize(w, h);
@@ -82,7 +85,7 @@ void BM_Svslam(benchmark::State& st, svslam::MatchingCost cost) {
   }
   params.lr_check = true;
   params.subpixel = true;
-  params.num_stripes = threads == 1 ? 1 : 4 * threads;
+  params.num_stripes = threads == 1 ? 1 : per_thread * threads;
   svslam::DenseStereo stereo(params, w, h);
   if (!stereo.initStatus()) {
     st.SkipWithError(stereo.initStatus().message().c_str());
@@ -98,6 +101,16 @@ void BM_Svslam(benchmark::State& st, svslam::MatchingCost cost) {
   setCounters(st, w, h, nd);
   st.counters["valid_fraction"] = out.stats.valid / (static_cast<double>(w) * h);
   st.SetLabel(out.stats.backend);
+}
+
+// args: width, height, disparities, threads
+void BM_Svslam(benchmark::State& st, svslam::MatchingCost cost) {
+  runSvslam(st, cost, kStripesPerThread);
+}
+
+// args: width, height, disparities, threads, stripes per thread (census 9x7)
+void BM_SvslamStripes(benchmark::State& st) {
+  runSvslam(st, svslam::MatchingCost::kCensus, static_cast<int>(st.range(4)));
 }
 
 void BM_OpenCvBM(benchmark::State& st) {
@@ -141,6 +154,11 @@ void configs(benchmark::internal::Benchmark* b) {
 
 BENCHMARK_CAPTURE(BM_Svslam, census9x7, svslam::MatchingCost::kCensus)->Apply(configs);
 BENCHMARK_CAPTURE(BM_Svslam, sad9x9, svslam::MatchingCost::kSad)->Apply(configs);
+BENCHMARK(BM_SvslamStripes)
+    ->ArgsProduct({{1024}, {768}, {128}, {2}, {1, 2, 4, 8}})
+    ->ArgNames({"W", "H", "ndisp", "threads", "stripes_per_thread"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_OpenCvBM)->Apply(configs);
 BENCHMARK(BM_OpenCvSGBM)->Apply(configs);
 
