@@ -158,8 +158,7 @@ const StereoKernels& avx2Kernels();
 void finalizeRowAvx2(const WtaRowState& s, const std::uint8_t* low_texture, int width,
                      const FinalizeParams& p, float* disp, float* sigma, float* curv,
                      FinalizeCounts& counts);
-// The AVX2 censusPlanesRow, shared with the AVX-512 table (its window loads are 256-bit there
-// too: a misaligned 512-bit load always splits across cache lines on Zen 4).
+// The AVX2 censusPlanesRow, shared with the AVX-512 table.
 void censusPlanesRowAvx2(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
                          int win_h, std::uint8_t* out, std::ptrdiff_t plane_stride);
 // The AVX2 StereoKernels::wtaNeighbours (gathers), shared with the AVX-512 table.

@@ -2,9 +2,8 @@
 // own instruction-set flags and selected at run time; bit-exact with stereo_kernels_scalar.cpp.
 // Vector bodies work on 32 x uint16 or 64 x uint8 columns; tails use masked loads and stores, or
 // (for the per-column kernels) the scalar reference at an offset. The byte-plane census
-// transform, the neighbour look-ups (gathers) and finalizeRow are the AVX2 kernels (256-bit is
-// as fast there: the census window loads are misaligned, and a misaligned 512-bit load always
-// splits across cache lines on Zen 4).
+// transform, the neighbour look-ups (gathers) and finalizeRow are the AVX2 kernels, shared
+// rather than rewritten (no 512-bit version of them has been measured).
 #include <immintrin.h>
 
 #include <algorithm>
