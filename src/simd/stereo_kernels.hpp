@@ -158,9 +158,6 @@ const StereoKernels& avx2Kernels();
 void finalizeRowAvx2(const WtaRowState& s, const std::uint8_t* low_texture, int width,
                      const FinalizeParams& p, float* disp, float* sigma, float* curv,
                      FinalizeCounts& counts);
-// The AVX2 censusPlanesRow, shared with the AVX-512 table.
-void censusPlanesRowAvx2(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
-                         int win_h, std::uint8_t* out, std::ptrdiff_t plane_stride);
 // The AVX2 StereoKernels::wtaNeighbours (gathers), shared with the AVX-512 table.
 void wtaNeighboursAvx2(const std::uint16_t* agg, std::ptrdiff_t stride, int num_disp, int width,
                        const WtaRowState& s);

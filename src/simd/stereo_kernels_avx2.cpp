@@ -346,10 +346,6 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
 
 }  // namespace
 
-void censusPlanesRowAvx2(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
-                         int win_h, std::uint8_t* out, std::ptrdiff_t plane_stride) {
-  censusPlanesRow(win, stride, width, win_w, win_h, out, plane_stride);
-}
 
 const StereoKernels& avx2Kernels() {
   static const StereoKernels k{Backend::kAvx2, "avx2",    censusRow, censusCostRow,

@@ -1,9 +1,9 @@
 // AVX-512 (F, BW, VL, VPOPCNTDQ, BITALG) backend of the stereo row kernels. Compiled with its
 // own instruction-set flags and selected at run time; bit-exact with stereo_kernels_scalar.cpp.
 // Vector bodies work on 32 x uint16 or 64 x uint8 columns; tails use masked loads and stores, or
-// (for the per-column kernels) the scalar reference at an offset. The byte-plane census
-// transform, the neighbour look-ups (gathers) and finalizeRow are the AVX2 kernels, shared
-// rather than rewritten (no 512-bit version of them has been measured).
+// (for the per-column kernels) the scalar reference at an offset. The neighbour look-ups
+// (gathers) and finalizeRow are the AVX2 kernels, shared rather than rewritten (no 512-bit
+// version of them has been measured).
 #include <immintrin.h>
 
 #include <algorithm>
@@ -85,6 +85,62 @@ inline __mmask32 tailMask32(int n) {
 }
 inline __mmask64 tailMask64(int n) {
   return n >= 64 ? ~__mmask64{0} : (n <= 0 ? __mmask64{0} : ((__mmask64{1} << n) - 1u));
+}
+
+// Byte-plane census of 64 pixels per step (StereoKernels::censusPlanesRow). W, H are the window
+// sides in the unrolled instances and 0 in the generic one. Per neighbour one compare into a
+// mask and acc = 2 acc + [nb < centre] (an add and a masked add), so offset 8j + b lands in bit
+// 7 - b of plane j; a partial last plane is shifted up to bit 7. Ragged end: masked loads and
+// stores (masked-out lanes are never read).
+template <int W, int H>
+void censusPlanesRowT(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
+                      int win_h, std::uint8_t* out, std::ptrdiff_t plane_stride) {
+  const int ww = W > 0 ? W : win_w;
+  const int wh = H > 0 ? H : win_h;
+  const int cx = ww / 2;
+  const int cy = wh / 2;
+  const __m512i one = _mm512_set1_epi8(1);
+  for (int x = 0; x < width; x += 64) {
+    const __mmask64 m = tailMask64(width - x);
+    const std::uint8_t* w = win + x;
+    const __m512i c = _mm512_maskz_loadu_epi8(m, w + cy * stride + cx);
+    __m512i acc = _mm512_setzero_si512();
+    int k = 0;
+#pragma GCC unroll 16
+    for (int dy = 0; dy < wh; ++dy) {
+#pragma GCC unroll 16
+      for (int dx = 0; dx < ww; ++dx) {
+        if (dy == cy && dx == cx) continue;
+        const __mmask64 lt =
+            _mm512_cmplt_epu8_mask(_mm512_maskz_loadu_epi8(m, w + dy * stride + dx), c);
+        acc = _mm512_add_epi8(acc, acc);
+        acc = _mm512_mask_add_epi8(acc, lt, acc, one);
+        if ((++k & 7) == 0) {
+          _mm512_mask_storeu_epi8(out + ((k >> 3) - 1) * plane_stride + x, m, acc);
+          acc = _mm512_setzero_si512();
+        }
+      }
+    }
+    if ((k & 7) != 0) {
+      for (int sh = k & 7; sh < 8; ++sh) acc = _mm512_add_epi8(acc, acc);
+      _mm512_mask_storeu_epi8(out + (k >> 3) * plane_stride + x, m, acc);
+    }
+    for (int j = (k + 7) >> 3; j < 8; ++j)  // planes past the window's bits are zero
+      _mm512_mask_storeu_epi8(out + j * plane_stride + x, m, _mm512_setzero_si512());
+  }
+}
+
+void censusPlanesRow(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
+                     int win_h, std::uint8_t* out, std::ptrdiff_t plane_stride) {
+  if (win_w == 9 && win_h == 7)
+    return censusPlanesRowT<9, 7>(win, stride, width, win_w, win_h, out, plane_stride);
+  if (win_w == 7 && win_h == 9)
+    return censusPlanesRowT<7, 9>(win, stride, width, win_w, win_h, out, plane_stride);
+  if (win_w == 7 && win_h == 7)
+    return censusPlanesRowT<7, 7>(win, stride, width, win_w, win_h, out, plane_stride);
+  if (win_w == 5 && win_h == 5)
+    return censusPlanesRowT<5, 5>(win, stride, width, win_w, win_h, out, plane_stride);
+  censusPlanesRowT<0, 0>(win, stride, width, win_w, win_h, out, plane_stride);
 }
 
 // Byte-plane Hamming costs of 64 pixels per step (StereoKernels::censusPlanesCostRows): the
@@ -327,7 +383,7 @@ const StereoKernels& avx512Kernels() {
                                wtaUpdateRows,
                                wtaNeighboursAvx2,
                                finalizeRowAvx2,
-                               censusPlanesRowAvx2,
+                               censusPlanesRow,
                                censusPlanesCostRows};
   return k;
 }
