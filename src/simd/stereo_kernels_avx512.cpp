@@ -216,15 +216,16 @@ void sadCostRow(const std::uint8_t* left, const std::uint8_t* right, int width, 
 
 void addSubRow(std::uint16_t* acc, const std::uint8_t* add, const std::uint8_t* sub,
                std::size_t n) {
-  std::size_t j = 0;
-  for (; j < n; j += 32) {
-    const __mmask32 m = tailMask32(static_cast<int>(n - j));
+  const auto step = [&](std::size_t j, __mmask32 m) {
     __m512i v = _mm512_add_epi16(_mm512_maskz_loadu_epi16(m, acc + j),
                                  _mm512_cvtepu8_epi16(_mm256_maskz_loadu_epi8(m, add + j)));
     if (sub != nullptr)
       v = _mm512_sub_epi16(v, _mm512_cvtepu8_epi16(_mm256_maskz_loadu_epi8(m, sub + j)));
     _mm512_mask_storeu_epi16(acc + j, m, v);
-  }
+  };
+  std::size_t j = 0;
+  for (; j + 32 <= n; j += 32) step(j, ~__mmask32{0});  // unmasked body, masked ragged end
+  if (j < n) step(j, tailMask32(static_cast<int>(n - j)));
 }
 
 // 256-bit loads: a misaligned 512-bit load always splits across two cache lines, a 256-bit one
@@ -250,35 +251,45 @@ void boxRowDirect(const std::uint16_t* in, int width, int win_w, std::uint16_t* 
 // 6 loads and 4 adds per 32 outputs for 9 columns instead of 9 and 8. t goes through a stack
 // buffer, a chunk of the row at a time, so its loads come long after its stores (no
 // store-forwarding stalls on the overlapping reads); the ends are masked.
+// Q = win_w / 3 in the unrolled instances, 0 in the generic one.
+template <int Q>
 void boxRowThrees(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
   constexpr int kChunk = 1024;
   alignas(64) std::uint16_t t[kChunk + 64];
-  const int q = win_w / 3;
+  const int q = Q > 0 ? Q : win_w / 3;
   for (int c0 = 0; c0 < width; c0 += kChunk) {
     const int n = std::min(kChunk, width - c0);
     const int nt = n + win_w - 3;  // t[0 .. nt): in[c0 .. c0 + n + win_w - 1) is readable
     const std::uint16_t* src = in + c0;
-    for (int j = 0; j < nt; j += 32) {
-      const __mmask32 m = tailMask32(nt - j);
+    const auto sum3 = [&](int j, __mmask32 m) {
       const __m512i s3 =
           _mm512_add_epi16(_mm512_add_epi16(_mm512_maskz_loadu_epi16(m, src + j),
                                             _mm512_maskz_loadu_epi16(m, src + j + 1)),
                            _mm512_maskz_loadu_epi16(m, src + j + 2));
       _mm512_store_si512(t + j, s3);
-    }
-    for (int x = 0; x < n; x += 32) {
-      const __mmask32 m = tailMask32(n - x);
+    };
+    const auto taps = [&](int x, __mmask32 m) {
       __m512i acc = _mm512_maskz_loadu_epi16(m, t + x);
+#pragma GCC unroll 11
       for (int k = 1; k < q; ++k)
         acc = _mm512_add_epi16(acc, _mm512_maskz_loadu_epi16(m, t + x + 3 * k));
       _mm512_mask_storeu_epi16(out + c0 + x, m, acc);
-    }
+    };
+    // Unmasked bodies (a constant all-ones mask), one masked step for each ragged end.
+    int j = 0;
+    for (; j + 32 <= nt; j += 32) sum3(j, ~__mmask32{0});
+    if (j < nt) sum3(j, tailMask32(nt - j));
+    int x = 0;
+    for (; x + 32 <= n; x += 32) taps(x, ~__mmask32{0});
+    if (x < n) taps(x, tailMask32(n - x));
   }
 }
 
 void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
   // (t's buffer holds a chunk plus 64 columns: windows up to 33 columns.)
-  if (win_w >= 6 && win_w <= 33 && win_w % 3 == 0) return boxRowThrees(in, width, win_w, out);
+  if (win_w == 9) return boxRowThrees<3>(in, width, win_w, out);
+  if (win_w == 15) return boxRowThrees<5>(in, width, win_w, out);
+  if (win_w >= 6 && win_w <= 33 && win_w % 3 == 0) return boxRowThrees<0>(in, width, win_w, out);
   boxRowDirect(in, width, win_w, out);
 }
 

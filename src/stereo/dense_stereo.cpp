@@ -310,20 +310,26 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
                                  census_nplanes_, W, d0 + i0, n, ringPlane(s, new_row, i0),
                                  ring_stride_);
       }
-      for (int p = 0; p < n; ++p) {
-        const int i = i0 + p;
-        std::uint16_t* col =
-            s.colsum.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_);
-        if (y != s.y0) {
-          if (fresh_new && !planes_block) computeCostPlane(s, new_row, i);
-          k_->addSubRow(col + kXo, ringPlane(s, new_row, i), ringPlane(s, old_row, i),
-                        static_cast<std::size_t>(W));
-        }
+      const auto colsumPlane = [&](int i) {
+        return s.colsum.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_);
+      };
+      // The block's running sums, then its border fills, then its boxes: a fill reads back the
+      // end of a row addSubRow has just stored in vectors, and the box reads the fill's small
+      // stores in vectors; either stalls (no store forwarding) unless other work comes between.
+      for (int i = i0; y != s.y0 && i < i0 + n; ++i) {
+        if (fresh_new && !planes_block) computeCostPlane(s, new_row, i);
+        k_->addSubRow(colsumPlane(i) + kXo, ringPlane(s, new_row, i), ringPlane(s, old_row, i),
+                      static_cast<std::size_t>(W));
+      }
+      for (int i = i0; i < i0 + n; ++i) {
+        std::uint16_t* col = colsumPlane(i);
         std::fill(col + kXo - rw, col + kXo, col[kXo]);
         std::fill(col + kXo + W, col + kXo + W + rw, col[kXo + W - 1]);
+      }
+      for (int i = i0; i < i0 + n; ++i) {
         std::uint16_t* agg =
             s.agg.data() + static_cast<std::size_t>(i + 1) * static_cast<std::size_t>(agg_stride_);
-        k_->boxRow(col + kXo - rw, W, params_.window_w, agg);
+        k_->boxRow(colsumPlane(i) + kXo - rw, W, params_.window_w, agg);
         std::fill(agg, agg + std::min(W, d0 + i), kImpossible);  // x - d < 0: no match possible
       }
       k_->wtaUpdateRows(
