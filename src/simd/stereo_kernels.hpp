@@ -154,7 +154,7 @@ const StereoKernels& scalarKernels();
 const StereoKernels& avx2Kernels();
 #endif
 #if defined(SVSLAM_HAVE_AVX2)
-// The AVX2 finalizeRow, shared with the AVX-512 table (8 float lanes suffice there too).
+// The AVX2 finalizeRow (stereo_kernels_avx2_finalize.cpp).
 void finalizeRowAvx2(const WtaRowState& s, const std::uint8_t* low_texture, int width,
                      const FinalizeParams& p, float* disp, float* sigma, float* curv,
                      FinalizeCounts& counts);
@@ -164,6 +164,10 @@ void wtaNeighboursAvx2(const std::uint16_t* agg, std::ptrdiff_t stride, int num_
 #endif
 #if defined(SVSLAM_HAVE_AVX512)
 const StereoKernels& avx512Kernels();
+// The AVX-512 finalizeRow (stereo_kernels_avx512_finalize.cpp).
+void finalizeRowAvx512(const WtaRowState& s, const std::uint8_t* low_texture, int width,
+                       const FinalizeParams& p, float* disp, float* sigma, float* curv,
+                       FinalizeCounts& counts);
 #endif
 #if defined(SVSLAM_HAVE_NEON)
 const StereoKernels& neonKernels();

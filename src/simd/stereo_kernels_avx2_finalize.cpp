@@ -1,4 +1,4 @@
-// AVX2 finalizeRow of the stereo kernels (shared by the AVX-512 table): the per-pixel steps of
+// AVX2 finalizeRow of the stereo kernels: the per-pixel steps of
 // the reference finalizeRange (uniqueness, texture, left-right check, sub-pixel, sigma) in 8
 // float lanes. Bit-exact with stereo_kernels_scalar.cpp.
 #include <immintrin.h>

@@ -1,9 +1,9 @@
 // AVX-512 (F, BW, VL, VPOPCNTDQ, BITALG) backend of the stereo row kernels. Compiled with its
 // own instruction-set flags and selected at run time; bit-exact with stereo_kernels_scalar.cpp.
 // Vector bodies work on 32 x uint16 or 64 x uint8 columns; tails use masked loads and stores, or
-// (for the per-column kernels) the scalar reference at an offset. The neighbour look-ups
-// (gathers) and finalizeRow are the AVX2 kernels, shared rather than rewritten (no 512-bit
-// version of them has been measured).
+// (for the per-column kernels) the scalar reference at an offset. The neighbour look-up
+// (gathers) is the AVX2 kernel, shared rather than rewritten; finalizeRow is in
+// stereo_kernels_avx512_finalize.cpp.
 #include <immintrin.h>
 
 #include <algorithm>
@@ -393,7 +393,7 @@ const StereoKernels& avx512Kernels() {
                                boxRow,
                                wtaUpdateRows,
                                wtaNeighboursAvx2,
-                               finalizeRowAvx2,
+                               finalizeRowAvx512,
                                censusPlanesRow,
                                censusPlanesCostRows};
   return k;
