@@ -89,9 +89,8 @@ inline __mmask64 tailMask64(int n) {
 
 // Byte-plane census of 64 pixels per step (StereoKernels::censusPlanesRow). W, H are the window
 // sides in the unrolled instances and 0 in the generic one. Per neighbour one compare into a
-// mask and acc = 2 acc + [nb < centre] (an add and a masked add), so offset 8j + b lands in bit
-// 7 - b of plane j; a partial last plane is shifted up to bit 7. Ragged end: masked loads and
-// stores (masked-out lanes are never read).
+// mask and one masked add of its bit: offset 8j + b sets bit 7 - b of plane j where
+// neighbour < centre. Ragged end: masked loads and stores (masked-out lanes are never read).
 template <int W, int H>
 void censusPlanesRowT(const std::uint8_t* win, std::ptrdiff_t stride, int width, int win_w,
                       int win_h, std::uint8_t* out, std::ptrdiff_t plane_stride) {
@@ -99,7 +98,8 @@ void censusPlanesRowT(const std::uint8_t* win, std::ptrdiff_t stride, int width,
   const int wh = H > 0 ? H : win_h;
   const int cx = ww / 2;
   const int cy = wh / 2;
-  const __m512i one = _mm512_set1_epi8(1);
+  __m512i bit[8];  // the b-th neighbour of a plane sets bit 7 - b
+  for (int b = 0; b < 8; ++b) bit[b] = _mm512_set1_epi8(static_cast<char>(0x80 >> b));
   for (int x = 0; x < width; x += 64) {
     const __mmask64 m = tailMask64(width - x);
     const std::uint8_t* w = win + x;
@@ -113,18 +113,14 @@ void censusPlanesRowT(const std::uint8_t* win, std::ptrdiff_t stride, int width,
         if (dy == cy && dx == cx) continue;
         const __mmask64 lt =
             _mm512_cmplt_epu8_mask(_mm512_maskz_loadu_epi8(m, w + dy * stride + dx), c);
-        acc = _mm512_add_epi8(acc, acc);
-        acc = _mm512_mask_add_epi8(acc, lt, acc, one);
+        acc = _mm512_mask_add_epi8(acc, lt, acc, bit[k & 7]);  // disjoint bits: add = or
         if ((++k & 7) == 0) {
           _mm512_mask_storeu_epi8(out + ((k >> 3) - 1) * plane_stride + x, m, acc);
           acc = _mm512_setzero_si512();
         }
       }
     }
-    if ((k & 7) != 0) {
-      for (int sh = k & 7; sh < 8; ++sh) acc = _mm512_add_epi8(acc, acc);
-      _mm512_mask_storeu_epi8(out + (k >> 3) * plane_stride + x, m, acc);
-    }
+    if ((k & 7) != 0) _mm512_mask_storeu_epi8(out + (k >> 3) * plane_stride + x, m, acc);
     for (int j = (k + 7) >> 3; j < 8; ++j)  // planes past the window's bits are zero
       _mm512_mask_storeu_epi8(out + j * plane_stride + x, m, _mm512_setzero_si512());
   }
