@@ -294,6 +294,12 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
         texAdd(old_row, -1);
       }
     }
+    // Planes of a ring row are ring_stride_ apart (one slot look-up per row, not per plane).
+    std::uint8_t* const new_ring = ringPlane(s, new_row, 0);
+    std::uint8_t* const old_ring = ringPlane(s, old_row, 0);
+    const auto ringOffset = [&](int i) {
+      return static_cast<std::ptrdiff_t>(i) * ring_stride_;
+    };
     simd::wtaInitRow(s.state(), W);
     // Planes go through the WTA in blocks of kPlaneBlock (rows of s.agg, row 0 = plane -1).
     std::fill(s.agg.data(), s.agg.data() + agg_stride_, kImpossible);
@@ -307,7 +313,7 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
         std::uint8_t* cen[2];
         censusPlanesRow(s, new_row, cen);
         k_->censusPlanesCostRows(cen[0], cen[1], row_stride_,
-                                 census_nplanes_, W, d0 + i0, n, ringPlane(s, new_row, i0),
+                                 census_nplanes_, W, d0 + i0, n, new_ring + ringOffset(i0),
                                  ring_stride_);
       }
       const auto colsumPlane = [&](int i) {
@@ -318,7 +324,7 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
       // stores in vectors; either stalls (no store forwarding) unless other work comes between.
       for (int i = i0; y != s.y0 && i < i0 + n; ++i) {
         if (fresh_new && !planes_block) computeCostPlane(s, new_row, i);
-        k_->addSubRow(colsumPlane(i) + kXo, ringPlane(s, new_row, i), ringPlane(s, old_row, i),
+        k_->addSubRow(colsumPlane(i) + kXo, new_ring + ringOffset(i), old_ring + ringOffset(i),
                       static_cast<std::size_t>(W));
       }
       for (int i = i0; i < i0 + n; ++i) {
