@@ -7,6 +7,7 @@
 #include <immintrin.h>
 
 #include <algorithm>
+#include <array>
 
 #include "simd/stereo_kernels.hpp"
 
@@ -242,50 +243,56 @@ void boxRowDirect(const std::uint16_t* in, int width, int win_w, std::uint16_t* 
   if (x < width) scalarKernels().boxRow(in + x, width - x, win_w, out + x);
 }
 
-// A window of 3 q columns (q >= 2) as q sums of 3: t[j] = in[j] + in[j + 1] + in[j + 2], then
-// out[x] = t[x] + t[x + 3] + ... + t[x + 3 (q - 1)] (the same sums mod 2^16, in another order):
-// 6 loads and 4 adds per 32 outputs for 9 columns instead of 9 and 8. t goes through a stack
-// buffer, a chunk of the row at a time, so its loads come long after its stores (no
-// store-forwarding stalls on the overlapping reads); the ends are masked.
-// Q = win_w / 3 in the unrolled instances, 0 in the generic one.
+// A window of 3 q columns (q = 2 .. 11) as q sums of 3: t[j] = in[j] + in[j + 1] + in[j + 2],
+// then out[x] = t[x] + t[x + 3] + ... + t[x + 3 (q - 1)] (the same sums mod 2^16, in another
+// order). The shifted vectors are made in registers by two-source word permutes rather than
+// loaded from shifted addresses (misaligned 512-bit loads split cache lines, and the box is
+// load-bound that way): per 32 outputs one load, 2 + (q - 1) permutes, q + 1 adds and one store.
+// t0, t1 hold t of columns [x, x + 64). The input is read at [0, width + 3q - 1) only (masked
+// past it), the ragged end of the output is masked.
 template <int Q>
-void boxRowThrees(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
-  constexpr int kChunk = 1024;
-  alignas(64) std::uint16_t t[kChunk + 64];
-  const int q = Q > 0 ? Q : win_w / 3;
-  for (int c0 = 0; c0 < width; c0 += kChunk) {
-    const int n = std::min(kChunk, width - c0);
-    const int nt = n + win_w - 3;  // t[0 .. nt): in[c0 .. c0 + n + win_w - 1) is readable
-    const std::uint16_t* src = in + c0;
-    const auto sum3 = [&](int j, __mmask32 m) {
-      const __m512i s3 =
-          _mm512_add_epi16(_mm512_add_epi16(_mm512_maskz_loadu_epi16(m, src + j),
-                                            _mm512_maskz_loadu_epi16(m, src + j + 1)),
-                           _mm512_maskz_loadu_epi16(m, src + j + 2));
-      _mm512_store_si512(t + j, s3);
-    };
-    const auto taps = [&](int x, __mmask32 m) {
-      __m512i acc = _mm512_maskz_loadu_epi16(m, t + x);
+void boxRowPermute(const std::uint16_t* in, int width, std::uint16_t* out) {
+  static_assert(Q >= 2 && 3 * (Q - 1) < 32, "shifts must stay within two vectors");
+  const int readable = width + 3 * Q - 1;
+  // sh[k]: lane j takes word j + k of the pair (a, b) (indices 32 .. 63 select from b).
+  static constexpr auto kIota = [] {
+    std::array<std::uint16_t, 64> v{};
+    for (int j = 0; j < 64; ++j) v[static_cast<std::size_t>(j)] = static_cast<std::uint16_t>(j);
+    return v;
+  }();
+  __m512i sh[3 * Q];
+  for (int k = 1; k < 3 * Q; ++k) sh[k] = _mm512_loadu_si512(kIota.data() + k);
+  const auto load = [&](int j) {
+    return _mm512_maskz_loadu_epi16(tailMask32(readable - j), in + j);
+  };
+  const auto threes = [&](__m512i a, __m512i b) {  // t[j] = c[j] + c[j + 1] + c[j + 2]
+    return _mm512_add_epi16(_mm512_add_epi16(a, _mm512_permutex2var_epi16(a, sh[1], b)),
+                            _mm512_permutex2var_epi16(a, sh[2], b));
+  };
+  __m512i b = load(32);
+  __m512i t0 = threes(load(0), b);
+  for (int x = 0; x < width; x += 32) {
+    const __m512i c = load(x + 64);
+    const __m512i t1 = threes(b, c);
+    __m512i acc = t0;
 #pragma GCC unroll 11
-      for (int k = 1; k < q; ++k)
-        acc = _mm512_add_epi16(acc, _mm512_maskz_loadu_epi16(m, t + x + 3 * k));
-      _mm512_mask_storeu_epi16(out + c0 + x, m, acc);
-    };
-    // Unmasked bodies (a constant all-ones mask), one masked step for each ragged end.
-    int j = 0;
-    for (; j + 32 <= nt; j += 32) sum3(j, ~__mmask32{0});
-    if (j < nt) sum3(j, tailMask32(nt - j));
-    int x = 0;
-    for (; x + 32 <= n; x += 32) taps(x, ~__mmask32{0});
-    if (x < n) taps(x, tailMask32(n - x));
+    for (int k = 1; k < Q; ++k)
+      acc = _mm512_add_epi16(acc, _mm512_permutex2var_epi16(t0, sh[3 * k], t1));
+    _mm512_mask_storeu_epi16(out + x, tailMask32(width - x), acc);
+    t0 = t1;
+    b = c;
   }
 }
 
+using BoxFn = void (*)(const std::uint16_t*, int, std::uint16_t*);
+constexpr BoxFn kBoxPermuteFns[10] = {
+    &boxRowPermute<2>, &boxRowPermute<3>, &boxRowPermute<4>, &boxRowPermute<5>,
+    &boxRowPermute<6>, &boxRowPermute<7>, &boxRowPermute<8>, &boxRowPermute<9>,
+    &boxRowPermute<10>, &boxRowPermute<11>};
+
 void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
-  // (t's buffer holds a chunk plus 64 columns: windows up to 33 columns.)
-  if (win_w == 9) return boxRowThrees<3>(in, width, win_w, out);
-  if (win_w == 15) return boxRowThrees<5>(in, width, win_w, out);
-  if (win_w >= 6 && win_w <= 33 && win_w % 3 == 0) return boxRowThrees<0>(in, width, win_w, out);
+  if (win_w >= 6 && win_w <= 33 && win_w % 3 == 0)
+    return kBoxPermuteFns[win_w / 3 - 2](in, width, out);
   boxRowDirect(in, width, win_w, out);
 }
 
