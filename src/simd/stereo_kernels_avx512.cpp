@@ -285,10 +285,10 @@ void boxRowPermute(const std::uint16_t* in, int width, std::uint16_t* out) {
 }
 
 using BoxFn = void (*)(const std::uint16_t*, int, std::uint16_t*);
-constexpr BoxFn kBoxPermuteFns[10] = {
-    &boxRowPermute<2>, &boxRowPermute<3>, &boxRowPermute<4>, &boxRowPermute<5>,
-    &boxRowPermute<6>, &boxRowPermute<7>, &boxRowPermute<8>, &boxRowPermute<9>,
-    &boxRowPermute<10>, &boxRowPermute<11>};
+constexpr BoxFn kBoxPermuteFns[10] = {&boxRowPermute<2>, &boxRowPermute<3>, &boxRowPermute<4>,
+                                      &boxRowPermute<5>, &boxRowPermute<6>, &boxRowPermute<7>,
+                                      &boxRowPermute<8>, &boxRowPermute<9>, &boxRowPermute<10>,
+                                      &boxRowPermute<11>};
 
 void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
   if (win_w >= 6 && win_w <= 33 && win_w % 3 == 0)
@@ -387,18 +387,10 @@ void wtaUpdateRows(const std::uint16_t* agg, std::ptrdiff_t stride, int n_planes
 }  // namespace
 
 const StereoKernels& avx512Kernels() {
-  static const StereoKernels k{Backend::kAvx512,
-                               "avx512",
-                               censusRow,
-                               censusCostRow,
-                               sadCostRow,
-                               addSubRow,
-                               boxRow,
-                               wtaUpdateRows,
-                               wtaNeighboursAvx2,
-                               finalizeRowAvx512,
-                               censusPlanesRow,
-                               censusPlanesCostRows};
+  static const StereoKernels k{
+      Backend::kAvx512,  "avx512",          censusRow,       censusCostRow,
+      sadCostRow,        addSubRow,         boxRow,          wtaUpdateRows,
+      wtaNeighboursAvx2, finalizeRowAvx512, censusPlanesRow, censusPlanesCostRows};
   return k;
 }
 

@@ -17,8 +17,7 @@ void finalizeRowAvx512(const WtaRowState& s, const std::uint8_t* low_texture, in
                        FinalizeCounts& counts) {
   const __m512i zero = _mm512_setzero_si512();
   const __m512i u16max = _mm512_set1_epi32(0xFFFF);
-  const __m512i lanes =
-      _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const __m512i lanes = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const __m512i vd0 = _mm512_set1_epi32(p.d0);
   const __m512i last_idx = _mm512_set1_epi32(p.num_disp - 1);
   const __m512i wmax = _mm512_set1_epi32(width - 1);
@@ -45,13 +44,11 @@ void finalizeRowAvx512(const WtaRowState& s, const std::uint8_t* low_texture, in
     __mmask16 low_tex = 0;
     if (low_texture != nullptr)
       low_tex = _mm_test_epi8_mask(
-          _mm_loadu_si128(reinterpret_cast<const __m128i*>(low_texture + x)),
-          _mm_set1_epi8(-1));
+          _mm_loadu_si128(reinterpret_cast<const __m128i*>(low_texture + x)), _mm_set1_epi8(-1));
     // 100 second and (100 + u) best are below 2^31, so signed compares order them.
     const __mmask16 no_margin = _mm512_cmple_epi32_mask(_mm512_mullo_epi32(second, hundred),
                                                         _mm512_mullo_epi32(best, uniq_factor));
-    const __mmask16 not_unique =
-        use_uniq & (_mm512_cmpeq_epi32_mask(second, u16max) | no_margin);
+    const __mmask16 not_unique = use_uniq & (_mm512_cmpeq_epi32_mask(second, u16max) | no_margin);
     const __m512i vx = _mm512_add_epi32(_mm512_set1_epi32(x), lanes);
     const __m512i xr = _mm512_min_epi32(
         _mm512_max_epi32(_mm512_sub_epi32(vx, _mm512_add_epi32(vd0, idx)), zero), wmax);
@@ -75,10 +72,9 @@ void finalizeRowAvx512(const WtaRowState& s, const std::uint8_t* low_texture, in
     counts.valid += 16 - __builtin_popcount(invalid);
 
     const __m512i denom = _mm512_sub_epi32(_mm512_add_epi32(cm, cp), _mm512_add_epi32(best, best));
-    const __mmask16 parabola = _mm512_cmpgt_epi32_mask(idx, zero) &
-                               _mm512_cmplt_epi32_mask(idx, last_idx) &
-                               _mm512_cmpneq_epi32_mask(cp, u16max) &
-                               _mm512_cmpgt_epi32_mask(denom, zero);
+    const __mmask16 parabola =
+        _mm512_cmpgt_epi32_mask(idx, zero) & _mm512_cmplt_epi32_mask(idx, last_idx) &
+        _mm512_cmpneq_epi32_mask(cp, u16max) & _mm512_cmpgt_epi32_mask(denom, zero);
     const __m512i safe_denom = _mm512_mask_mov_epi32(_mm512_set1_epi32(1), parabola, denom);
     const __m512 q = _mm512_div_ps(_mm512_cvtepi32_ps(_mm512_sub_epi32(cm, cp)),
                                    _mm512_cvtepi32_ps(_mm512_add_epi32(safe_denom, safe_denom)));

@@ -28,15 +28,15 @@ struct DenseStereo::Stripe {
   AlignedBuffer<std::uint8_t> ring;  // ring_size cost rows of numDisp planes of ring_stride bytes
   std::vector<int> ring_row;         // image row held by each ring slot, -1 if none
   AlignedBuffer<std::uint16_t> colsum;  // numDisp planes of cost_stride_, x = 0 at kXo
-  AlignedBuffer<std::uint16_t> agg;  // numDisp + 1 rows of agg_stride_: plane -1, planes
+  AlignedBuffer<std::uint16_t> agg;     // numDisp + 1 rows of agg_stride_: plane -1, planes
   AlignedBuffer<std::uint16_t> best, second, cm, cp, pm1, pm2, best_r;
   AlignedBuffer<std::int16_t> bidx, idx_r;
   std::vector<std::uint32_t> tex_col;
   std::vector<std::uint8_t> low_texture;  // 1 where the window's mean gradient is too low
   std::vector<std::uint8_t> grad;
   std::vector<std::uint32_t> prefilter_scratch;  // column sums of the mean-removal prefilter
-  AlignedBuffer<std::uint8_t> census_planes;  // one row of byte-plane census, left then right
-  int census_row = -1;                        // image row held in census_planes, -1 if none
+  AlignedBuffer<std::uint8_t> census_planes;     // one row of byte-plane census, left then right
+  int census_row = -1;                           // image row held in census_planes, -1 if none
   DenseStereoStats stats;
 
   simd::WtaRowState state() {
@@ -184,10 +184,10 @@ void DenseStereo::censusPlanesRow(Stripe& s, int row, std::uint8_t* (&out)[2]) c
   if (s.census_row == row) return;
   for (int side = 0; side < 2; ++side) {
     const ImageU8& padded = side == 0 ? padded_left_ : padded_right_;
-    const std::uint8_t* win = padded.row(row + pad_y_ - params_.census_h / 2) + pad_x_ -
-                              params_.census_w / 2;
-    k_->censusPlanesRow(win, padded.stride(), width_, params_.census_w, params_.census_h,
-                        out[side], row_stride_);
+    const std::uint8_t* win =
+        padded.row(row + pad_y_ - params_.census_h / 2) + pad_x_ - params_.census_w / 2;
+    k_->censusPlanesRow(win, padded.stride(), width_, params_.census_w, params_.census_h, out[side],
+                        row_stride_);
   }
   for (int j = 0; j < 8; ++j) {  // right planes: x < 0 replicates x = 0 (read at x - d)
     std::uint8_t* plane = out[1] + j * row_stride_;
@@ -222,9 +222,8 @@ void DenseStereo::ensureCostRow(Stripe& s, int row) const {
     // All planes of the row at once (ring planes of a row are ring_stride_ apart).
     std::uint8_t* cen[2];
     censusPlanesRow(s, row, cen);
-    k_->censusPlanesCostRows(cen[0], cen[1], row_stride_,
-                             census_nplanes_, width_, params_.min_disp, params_.numDisp(),
-                             ringPlane(s, row, 0), ring_stride_);
+    k_->censusPlanesCostRows(cen[0], cen[1], row_stride_, census_nplanes_, width_, params_.min_disp,
+                             params_.numDisp(), ringPlane(s, row, 0), ring_stride_);
   } else {
     for (int i = 0; i < params_.numDisp(); ++i) computeCostPlane(s, row, i);
   }
@@ -297,9 +296,7 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
     // Planes of a ring row are ring_stride_ apart (one slot look-up per row, not per plane).
     std::uint8_t* const new_ring = ringPlane(s, new_row, 0);
     std::uint8_t* const old_ring = ringPlane(s, old_row, 0);
-    const auto ringOffset = [&](int i) {
-      return static_cast<std::ptrdiff_t>(i) * ring_stride_;
-    };
+    const auto ringOffset = [&](int i) { return static_cast<std::ptrdiff_t>(i) * ring_stride_; };
     simd::wtaInitRow(s.state(), W);
     // Planes go through the WTA in blocks of kPlaneBlock (rows of s.agg, row 0 = plane -1).
     std::fill(s.agg.data(), s.agg.data() + agg_stride_, kImpossible);
@@ -312,12 +309,12 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
         // they are consumed right below while still in L1.
         std::uint8_t* cen[2];
         censusPlanesRow(s, new_row, cen);
-        k_->censusPlanesCostRows(cen[0], cen[1], row_stride_,
-                                 census_nplanes_, W, d0 + i0, n, new_ring + ringOffset(i0),
-                                 ring_stride_);
+        k_->censusPlanesCostRows(cen[0], cen[1], row_stride_, census_nplanes_, W, d0 + i0, n,
+                                 new_ring + ringOffset(i0), ring_stride_);
       }
       const auto colsumPlane = [&](int i) {
-        return s.colsum.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_);
+        return s.colsum.data() +
+               static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_);
       };
       // The block's running sums, then its border fills, then its boxes: a fill reads back the
       // end of a row addSubRow has just stored in vectors, and the box reads the fill's small
