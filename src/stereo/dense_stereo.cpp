@@ -8,6 +8,7 @@
 #include <string>
 
 #include "stereo/prefilter.hpp"
+#include "stereo/texture_filter.hpp"
 
 namespace svslam {
 namespace {
@@ -33,7 +34,6 @@ struct DenseStereo::Stripe {
   AlignedBuffer<std::int16_t> bidx, idx_r;
   std::vector<std::uint32_t> tex_col;
   std::vector<std::uint8_t> low_texture;  // 1 where the window's mean gradient is too low
-  std::vector<std::uint8_t> grad;
   std::vector<std::uint32_t> prefilter_scratch;  // column sums of the mean-removal prefilter
   AlignedBuffer<std::uint8_t> census_planes;     // one row of byte-plane census, left then right
   int census_row = -1;                           // image row held in census_planes, -1 if none
@@ -120,7 +120,6 @@ DenseStereo::DenseStereo(const DenseStereoParams& params, int width, int height)
     st->idx_r.resize(wn + 16);  // finalizeRow reads idx_r at [0, width + 1)
     st->tex_col.assign(static_cast<std::size_t>(width), 0);
     st->low_texture.assign(static_cast<std::size_t>(width), 0);
-    st->grad.assign(static_cast<std::size_t>(width), 0);
     if (census && census_planes_)
       st->census_planes.resize(static_cast<std::size_t>(16 * row_stride_));
     st->prefilter_scratch.assign(static_cast<std::size_t>(width + params_.prefilter_size), 0);
@@ -253,18 +252,9 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
   fin.sigma_by_denom = sigma_by_denom_.data();
   fin.max_denom = static_cast<int>(sigma_by_denom_.size()) - 1;
 
-  // Central-difference gradient |I(x+1) - I(x-1)| of left row r, for the texture filter.
-  auto gradRow = [&](int r) {
-    const std::uint8_t* p = padded_left_.row(r + pad_y_) + pad_x_;
-    for (int x = 0; x < W; ++x)
-      s.grad[static_cast<std::size_t>(x)] =
-          static_cast<std::uint8_t>(std::abs(p[x + 1] - p[x - 1]));
-  };
+  // Texture column sums of left row r (gradients of the padded row: x +- 1 readable).
   auto texAdd = [&](int r, int sign) {
-    gradRow(r);
-    for (int x = 0; x < W; ++x)
-      s.tex_col[static_cast<std::size_t>(x)] +=
-          static_cast<std::uint32_t>(sign * s.grad[static_cast<std::size_t>(x)]);
+    addRowGradients(padded_left_.row(r + pad_y_) + pad_x_, W, sign, s.tex_col.data());
   };
 
   for (int y = s.y0; y < s.y1; ++y) {
@@ -342,20 +332,7 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
     // Costs at d_best -+ 1 for the parabola, from the stored planes.
     k_->wtaNeighbours(s.agg.data() + agg_stride_, agg_stride_, D, W, st);
     if (fresh_new) s.ring_row[static_cast<std::size_t>(new_row % s.ring_size)] = new_row;
-    if (use_texture) {
-      // Horizontal box of the texture column sums, borders replicated.
-      std::uint32_t sum = 0;
-      for (int k = -rw; k <= rw; ++k)
-        sum += s.tex_col[static_cast<std::size_t>(std::clamp(k, 0, W - 1))];
-      for (int x = 0; x < W; ++x) {
-        if (x > 0) {
-          sum += s.tex_col[static_cast<std::size_t>(std::min(x + rw, W - 1))];
-          sum -= s.tex_col[static_cast<std::size_t>(std::max(x - rw - 1, 0))];
-        }
-        s.low_texture[static_cast<std::size_t>(x)] =
-            static_cast<std::uint8_t>(static_cast<double>(sum) < texture_limit);
-      }
-    }
+    if (use_texture) markLowTexture(s.tex_col.data(), W, rw, texture_limit, s.low_texture.data());
     // 4-5. Filters and sub-pixel refinement.
     k_->finalizeRow(s.state(), use_texture ? s.low_texture.data() : nullptr, W, fin,
                     out.disparity_px.row(y), out.sigma_d_px.row(y), out.curvature.row(y), counts);
