@@ -346,7 +346,6 @@ void boxRow(const std::uint16_t* in, int width, int win_w, std::uint16_t* out) {
 
 }  // namespace
 
-
 const StereoKernels& avx2Kernels() {
   static const StereoKernels k{Backend::kAvx2, "avx2",    censusRow, censusCostRow,
                                sadCostRow,     addSubRow, boxRow,    avx2_detail::wtaUpdateRows,

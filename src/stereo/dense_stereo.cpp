@@ -33,7 +33,7 @@ struct DenseStereo::Stripe {
   AlignedBuffer<std::uint16_t> best, second, cm, cp, pm1, pm2, best_r;
   AlignedBuffer<std::int16_t> bidx, idx_r;
   std::vector<std::uint32_t> tex_col;
-  std::vector<std::uint8_t> low_texture;  // 1 where the window's mean gradient is too low
+  std::vector<std::uint8_t> low_texture;         // 1 where the window's mean gradient is too low
   std::vector<std::uint32_t> prefilter_scratch;  // column sums of the mean-removal prefilter
   AlignedBuffer<std::uint8_t> census_planes;     // one row of byte-plane census, left then right
   int census_row = -1;                           // image row held in census_planes, -1 if none
@@ -252,6 +252,9 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
   fin.sigma_by_denom = sigma_by_denom_.data();
   fin.max_denom = static_cast<int>(sigma_by_denom_.size()) - 1;
 
+  const auto colsumPlane = [&](int i) {
+    return s.colsum.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_);
+  };
   // Texture column sums of left row r (gradients of the padded row: x +- 1 readable).
   auto texAdd = [&](int r, int sign) {
     addRowGradients(padded_left_.row(r + pad_y_) + pad_x_, W, sign, s.tex_col.data());
@@ -270,10 +273,8 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
         const int rr = clampRow(r, height_);
         ensureCostRow(s, rr);
         for (int i = 0; i < D; ++i)
-          k_->addSubRow(s.colsum.data() +
-                            static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_) +
-                            kXo,
-                        ringPlane(s, rr, i), nullptr, static_cast<std::size_t>(W));
+          k_->addSubRow(colsumPlane(i) + kXo, ringPlane(s, rr, i), nullptr,
+                        static_cast<std::size_t>(W));
         if (use_texture) texAdd(rr, 1);
       }
     } else {
@@ -302,10 +303,6 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
         k_->censusPlanesCostRows(cen[0], cen[1], row_stride_, census_nplanes_, W, d0 + i0, n,
                                  new_ring + ringOffset(i0), ring_stride_);
       }
-      const auto colsumPlane = [&](int i) {
-        return s.colsum.data() +
-               static_cast<std::size_t>(i) * static_cast<std::size_t>(cost_stride_);
-      };
       // The block's running sums, then its border fills, then its boxes: a fill reads back the
       // end of a row addSubRow has just stored in vectors, and the box reads the fill's small
       // stores in vectors; either stalls (no store forwarding) unless other work comes between.
