@@ -22,6 +22,7 @@ void RunSummary::add(int frame, const SlamFrameResult& sr, bool ekf_mode) {
     landmarks_in_map = sr.landmarks_in_map;
     added += sr.added;
     retired += sr.retired;
+    restored += sr.restored;
   }
   ++frames;
   if (r.tracked) {
@@ -47,9 +48,9 @@ std::string latency(const rt::LatencySummary& l) {
 }
 }  // namespace
 
-std::string statsJson(const config::RunConfig& cfg, const std::string& source,
-                      const RunSummary& s, const StageTimes& times,
-                      const rt::PipelineReport& pipeline, const std::string& error) {
+std::string statsJson(const config::RunConfig& cfg, const std::string& source, const RunSummary& s,
+                      const StageTimes& times, const rt::PipelineReport& pipeline,
+                      const std::string& error) {
   JsonObject fails;
   for (const auto& [reason, n] : s.failure_counts) fails.add(reason, n);
   std::string list = "[";
@@ -84,6 +85,7 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source,
         .add("landmarks_in_map", s.landmarks_in_map)
         .add("landmarks_added", s.added)
         .add("landmarks_retired", s.retired)
+        .add("landmarks_restored", s.restored)
         .add("mean_landmarks_observed", s.sum_observed / n, 1)
         .add("mean_landmarks_reperceived", s.sum_reperceived / n, 2)
         .add("mean_observations_gated", s.sum_gated / n, 2)

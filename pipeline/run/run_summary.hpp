@@ -22,7 +22,7 @@ struct RunSummary {
   // EKF mode.
   double sum_observed = 0, sum_reperceived = 0, sum_gated = 0, sum_in_state = 0;
   double sum_visible = 0, sum_no_match = 0, sum_no_stereo = 0;
-  int max_in_state = 0, landmarks_in_map = 0, added = 0, retired = 0;
+  int max_in_state = 0, landmarks_in_map = 0, added = 0, retired = 0, restored = 0;
 
   // Adds one processed frame (source index `frame`).
   void add(int frame, const SlamFrameResult& r, bool ekf_mode);
@@ -31,8 +31,8 @@ struct RunSummary {
 // stats.json: the run's configuration summary, the per-frame means, the per-stage times
 // (`times`: algorithm stages, ms) and the pipeline's report (stage latencies, end-to-end
 // latency capture -> pose published, queues, drops, frames per second).
-std::string statsJson(const config::RunConfig& cfg, const std::string& source,
-                      const RunSummary& s, const StageTimes& times,
-                      const rt::PipelineReport& pipeline, const std::string& error);
+std::string statsJson(const config::RunConfig& cfg, const std::string& source, const RunSummary& s,
+                      const StageTimes& times, const rt::PipelineReport& pipeline,
+                      const std::string& error);
 
 }  // namespace svslam::run

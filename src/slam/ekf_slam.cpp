@@ -24,8 +24,7 @@ template <int N>
 CovarianceFault covarianceFault(const Eigen::Matrix<double, N, N>& C, bool definite) {
   if (!C.allFinite()) return CovarianceFault::kNonFinite;
   const double scale = C.cwiseAbs().maxCoeff();
-  if ((C - C.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale)
-    return CovarianceFault::kAsymmetric;
+  if ((C - C.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) return CovarianceFault::kAsymmetric;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(C, Eigen::EigenvaluesOnly);
   const double min_eig = es.eigenvalues()(0);
   if (definite ? !(min_eig > 0) : min_eig < -1e-12 * scale) return CovarianceFault::kNotPositive;
@@ -34,8 +33,7 @@ CovarianceFault covarianceFault(const Eigen::Matrix<double, N, N>& C, bool defin
 
 // covarianceFault with a message naming `what` (the message is built only on failure).
 template <int N>
-Status checkCovariance(const Eigen::Matrix<double, N, N>& C, bool definite,
-                       std::string_view what) {
+Status checkCovariance(const Eigen::Matrix<double, N, N>& C, bool definite, std::string_view what) {
   const char* problem = nullptr;
   switch (covarianceFault<N>(C, definite)) {
     case CovarianceFault::kNone:
@@ -126,9 +124,7 @@ Status EkfSlam::reset(const Eigen::Isometry3d& T_world_cam, const Matrix6d& P0) 
   return Status::ok();
 }
 
-void EkfSlam::reserveIds(int n) {
-  slot_of_id_.reserve(static_cast<std::size_t>(std::max(n, 0)));
-}
+void EkfSlam::reserveIds(int n) { slot_of_id_.reserve(static_cast<std::size_t>(std::max(n, 0))); }
 
 int EkfSlam::slotOf(int id) const {
   if (id < 0 || id >= static_cast<int>(slot_of_id_.size())) return -1;
@@ -186,7 +182,8 @@ Status EkfSlam::checkObservations(const std::vector<LandmarkObservation>& obs) c
     if (slotOf(obs[k].id) < 0)
       return Status::invalidArgument(what(k) + ": unknown landmark id " +
                                      std::to_string(obs[k].id));
-    if (!obs[k].z_cam.allFinite()) return Status::invalidArgument(what(k) + ": z_cam is not finite");
+    if (!obs[k].z_cam.allFinite())
+      return Status::invalidArgument(what(k) + ": z_cam is not finite");
     if (covarianceFault<3>(obs[k].R, true) != CovarianceFault::kNone)
       return checkCovariance<3>(obs[k].R, true, what(k) + ": R");
   }
@@ -369,6 +366,50 @@ Result<int> EkfSlam::addLandmark(const Eigen::Vector3d& z_cam, const Eigen::Matr
   ids_.push_back(id);
   slot_of_id_.push_back(s);
   return id;
+}
+
+Result<int> EkfSlam::addLandmarkFromExactPose(const Eigen::Isometry3d& T_world_cam_exact,
+                                              const Eigen::Vector3d& z_cam,
+                                              const Eigen::Matrix3d& R_z) {
+  if (!init_status_) return init_status_;
+  if (!z_cam.allFinite() || !T_world_cam_exact.matrix().allFinite())
+    return Status::invalidArgument("addLandmarkFromExactPose: z_cam or the pose is not finite");
+  if (Status s = checkCovariance<3>(R_z, false, "addLandmarkFromExactPose: R_z"); !s) return s;
+  if (numLandmarks() >= params_.max_landmarks)
+    return Status::failedPrecondition("addLandmarkFromExactPose: the state holds max_landmarks = " +
+                                      std::to_string(params_.max_landmarks) + " landmarks");
+  const int n = stateDim(), s = numLandmarks(), o = n;
+  const Eigen::Matrix3d R = T_world_cam_exact.linear();
+  P_.block(o, 0, 3, n).setZero();
+  P_.block<3, 3>(o, o) = R * R_z * R.transpose();
+  m_world_.col(s) = initLandmark(T_world_cam_exact, z_cam);
+  const int id = next_id_++;
+  ids_.push_back(id);
+  slot_of_id_.push_back(s);
+  return id;
+}
+
+Status EkfSlam::restoreLandmark(int id, const Eigen::Vector3d& m_world,
+                                const Eigen::Matrix3d& cov) {
+  if (!init_status_) return init_status_;
+  if (id < 0 || id >= static_cast<int>(slot_of_id_.size()))
+    return Status::notFound("restoreLandmark: landmark " + std::to_string(id) + " was never added");
+  if (slotOf(id) >= 0)
+    return Status::failedPrecondition("restoreLandmark: landmark " + std::to_string(id) +
+                                      " is in the state");
+  if (!m_world.allFinite())
+    return Status::invalidArgument("restoreLandmark: m_world is not finite");
+  if (Status s = checkCovariance<3>(cov, false, "restoreLandmark: cov"); !s) return s;
+  if (numLandmarks() >= params_.max_landmarks)
+    return Status::failedPrecondition("restoreLandmark: the state holds max_landmarks = " +
+                                      std::to_string(params_.max_landmarks) + " landmarks");
+  const int n = stateDim(), s = numLandmarks(), o = n;
+  P_.block(o, 0, 3, n).setZero();
+  P_.block<3, 3>(o, o) = cov;
+  m_world_.col(s) = m_world;
+  ids_.push_back(id);
+  slot_of_id_[static_cast<std::size_t>(id)] = s;
+  return Status::ok();
 }
 
 Status EkfSlam::removeLandmark(int id, Eigen::Vector3d* m_world, Eigen::Matrix3d* cov) {

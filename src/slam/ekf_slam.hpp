@@ -119,6 +119,18 @@ class EkfSlam {
   // Adds the landmark measured at z_cam (current camera frame, m) with covariance R_z (m^2,
   // symmetric positive semi-definite); returns its id. failedPrecondition when the state is full.
   Result<int> addLandmark(const Eigen::Vector3d& z_cam, const Eigen::Matrix3d& R_z);
+  // Adds a landmark measured at z_cam (m, covariance R_z) from the exactly known pose
+  // T_world_cam_exact (no uncertainty, e.g. the first frame, which defines the world frame) by a
+  // measurement independent of the state: eqs. (4)-(5) with P_pose = 0, so m = T z,
+  // P_mm = R R_z R^T and every cross covariance P_m,x = 0.
+  Result<int> addLandmarkFromExactPose(const Eigen::Isometry3d& T_world_cam_exact,
+                                       const Eigen::Vector3d& z_cam, const Eigen::Matrix3d& R_z);
+  // Puts a removed landmark back into the state under its id, at m_world (m) with covariance
+  // cov (m^2) and no cross covariance with the rest of the state: the correlations dropped by
+  // removeLandmark are not restored (see slam_system.hpp step 5 for what that assumes).
+  // notFound when `id` was never added, failedPrecondition when it is in the state or the
+  // state is full.
+  Status restoreLandmark(int id, const Eigen::Vector3d& m_world, const Eigen::Matrix3d& cov);
   // Removes landmark `id` from the state; its final position and covariance go to m_world and
   // cov when they are not null.
   Status removeLandmark(int id, Eigen::Vector3d* m_world, Eigen::Matrix3d* cov);

@@ -74,5 +74,4 @@ void LandmarkManager::observed(int id, int frame) {
   ++m.observations;
 }
 
-
 }  // namespace svslam

@@ -26,16 +26,18 @@ namespace svslam {
 struct PointTrack {
   int track_len = 1;  // consecutive frames in which this point was matched
   bool candidate = false;
+  int anchor = -1;  // a candidate of the first frame: its index in SlamSystem's anchors
 };
 
 struct MapLandmark {
   int id = -1;
   Eigen::Vector3d p_world = Eigen::Vector3d::Zero();  // metres
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();      // m^2
-  bool active = false;  // in the filter state (else retired)
+  bool active = false;                                // in the filter state (else retired)
   int created_frame = 0;
   int last_seen_frame = 0;
   int observations = 0;
+  bool anchored = false;  // initialised from the first frame (SlamSystem step 4)
 };
 
 // Appearance and history of landmarks, by id.
@@ -80,10 +82,9 @@ class LandmarkManager {
   }
   int h_, big_;
   int count_ = 0;
-  std::vector<MapLandmark> info_;  // by id
-  std::vector<View> views_;        // by id
+  std::vector<MapLandmark> info_;      // by id
+  std::vector<View> views_;            // by id
   std::vector<std::uint8_t> patches_;  // by id, patchBytes() each: (4h+1)^2 grey levels
-
 };
 
 }  // namespace svslam

@@ -24,48 +24,77 @@ double orderKey(double v) { return std::isnan(v) ? std::numeric_limits<double>::
 
 }  // namespace
 
+bool SlamSystem::predictLandmark(const Eigen::Vector3d& m, const Eigen::Matrix3d& C,
+                                 const Eigen::Isometry3d& T_wc, const Matrix6d& P_pose,
+                                 SearchPrediction& pr) const {
+  const int h = params_.patch_half_px;
+  const double f = calib_.f_px, b = calib_.baseline_m;
+  const Eigen::Matrix3d Rt = T_wc.linear().transpose();
+  const Eigen::Vector3d dm = m - T_wc.translation();
+  const Eigen::Vector3d z = Rt * dm;
+  if (!(z.z() > 0.1)) return false;
+  pr.u = f * z.x() / z.z() + calib_.cx_px;
+  pr.v = f * z.y() / z.z() + calib_.cy_px;
+  pr.d = f * b / z.z();
+  pr.z_cam = z;
+  if (pr.u < h + 1 || pr.v < h + 1 || pr.u >= calib_.width - h - 2 || pr.v >= calib_.height - h - 2)
+    return false;
+  // Covariance of the predicted camera-frame point (pose and landmark; the cross terms are
+  // left out, which overstates the spread: a wider search, never a narrower one):
+  // z = R^T (m - t), dz/d(dtheta) = R^T [m - t]x, dz/d(dt) = -R^T, dz/dm = R^T.
+  Eigen::Matrix<double, 3, 6> J;
+  Eigen::Matrix3d sk;
+  sk << 0, -dm.z(), dm.y(), dm.z(), 0, -dm.x(), -dm.y(), dm.x(), 0;
+  J.leftCols<3>() = Rt * sk;
+  J.rightCols<3>() = -Rt;
+  const Eigen::Matrix3d Cz = J * P_pose * J.transpose() + Rt * C * Rt.transpose();
+  Eigen::Matrix<double, 3, 3> Jp;  // d(u, v, d)/dz
+  const double iz = 1.0 / z.z();
+  Jp << f * iz, 0, -f * z.x() * iz * iz, 0, f * iz, -f * z.y() * iz * iz, 0, 0, -f * b * iz * iz;
+  const Eigen::Matrix3d Cuvd = Jp * Cz * Jp.transpose();
+  pr.sigma_px = std::sqrt(std::max({Cuvd(0, 0), Cuvd(1, 1), 0.0}));
+  pr.sigma_d = std::sqrt(std::max(Cuvd(2, 2), 0.0));
+  return true;
+}
+
+int SlamSystem::bestStereoPoint(ImageView<const std::uint8_t> left,
+                                ImageView<const std::uint8_t> patch, const PatchStats& ps,
+                                const SearchPrediction& pr, int r) const {
+  const int h = params_.patch_half_px;
+  const auto& pts = vo_.points();
+  int best_j = -1;
+  float best_s = params_.reperception_min_zncc;
+  for (std::size_t j = 0; j < pts.size(); ++j) {
+    const double du = pts[j].u_px - pr.u, dv = pts[j].v_px - pr.v;
+    if (du * du + dv * dv > static_cast<double>(r) * r) continue;
+    const int x = static_cast<int>(std::lround(pts[j].u_px));
+    const int y = static_cast<int>(std::lround(pts[j].v_px));
+    if (!patchInside(left, x, y, h)) continue;
+    const float sc = zncc(patch, ps, left, x, y);
+    if (sc > best_s) {
+      best_s = sc;
+      best_j = static_cast<int>(j);
+    }
+  }
+  return best_j;
+}
+
 void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
                                  ImageView<const std::uint8_t> right, SlamFrameResult& out) {
   obs_.clear();
   obs_uv_.clear();
   const int h = params_.patch_half_px;
   const Eigen::Isometry3d T_wc = ekf_.pose();
-  const Eigen::Matrix3d Rt = T_wc.linear().transpose();
   const Matrix6d P_pose = ekf_.poseCovariance();
-  const double f = calib_.f_px, b = calib_.baseline_m;
   std::vector<SearchPrediction>& preds = preds_;
   preds.clear();
   for (const int id : ekf_.landmarkIds()) {
     Eigen::Vector3d m;
     Eigen::Matrix3d C;
     if (!ekf_.landmark(id, m, C)) continue;
-    const Eigen::Vector3d dm = m - T_wc.translation();
-    const Eigen::Vector3d z = Rt * dm;
-    if (!(z.z() > 0.1)) continue;
     SearchPrediction pr;
+    if (!predictLandmark(m, C, T_wc, P_pose, pr)) continue;
     pr.id = id;
-    pr.u = f * z.x() / z.z() + calib_.cx_px;
-    pr.v = f * z.y() / z.z() + calib_.cy_px;
-    pr.d = f * b / z.z();
-    pr.z_cam = z;
-    if (pr.u < h + 1 || pr.v < h + 1 || pr.u >= calib_.width - h - 2 ||
-        pr.v >= calib_.height - h - 2)
-      continue;
-    // Covariance of the predicted camera-frame point (pose and landmark; the cross terms are
-    // left out, which overstates the spread: a wider search, never a narrower one):
-    // z = R^T (m - t), dz/d(dtheta) = R^T [m - t]x, dz/d(dt) = -R^T, dz/dm = R^T.
-    Eigen::Matrix<double, 3, 6> J;
-    Eigen::Matrix3d sk;
-    sk << 0, -dm.z(), dm.y(), dm.z(), 0, -dm.x(), -dm.y(), dm.x(), 0;
-    J.leftCols<3>() = Rt * sk;
-    J.rightCols<3>() = -Rt;
-    const Eigen::Matrix3d Cz = J * P_pose * J.transpose() + Rt * C * Rt.transpose();
-    Eigen::Matrix<double, 3, 3> Jp;  // d(u, v, d)/dz
-    const double iz = 1.0 / z.z();
-    Jp << f * iz, 0, -f * z.x() * iz * iz, 0, f * iz, -f * z.y() * iz * iz, 0, 0, -f * b * iz * iz;
-    const Eigen::Matrix3d Cuvd = Jp * Cz * Jp.transpose();
-    pr.sigma_px = std::sqrt(std::max({Cuvd(0, 0), Cuvd(1, 1), 0.0}));
-    pr.sigma_d = std::sqrt(std::max(Cuvd(2, 2), 0.0));
     pr.tracked = landmarks_.info(id).last_seen_frame == frame_ - 1;
     pr.order = static_cast<int>(preds.size());
     preds.push_back(pr);
@@ -109,27 +138,13 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     if (!pr.tracked) {
       // Re-perception: among this frame's stereo points near the prediction (cheap, and the
       // point already has its disparity).
-      const auto& pts = vo_.points();
-      int best_j = -1;
-      float best_s = params_.reperception_min_zncc;
-      for (std::size_t j = 0; j < pts.size(); ++j) {
-        const double du = pts[j].u_px - pr.u, dv = pts[j].v_px - pr.v;
-        if (du * du + dv * dv > static_cast<double>(r) * r) continue;
-        const int x = static_cast<int>(std::lround(pts[j].u_px));
-        const int y = static_cast<int>(std::lround(pts[j].v_px));
-        if (!patchInside(left, x, y, h)) continue;
-        const float sc = zncc(patch, ps, left, x, y);
-        if (sc > best_s) {
-          best_s = sc;
-          best_j = static_cast<int>(j);
-        }
-      }
+      const int best_j = bestStereoPoint(left, patch, ps, pr, r);
       StereoPoint sp;
       if (best_j < 0) {
         ++out.search_no_match;
         continue;
       }
-      const TrackPoint& tp = pts[static_cast<std::size_t>(best_j)];
+      const TrackPoint& tp = vo_.points()[static_cast<std::size_t>(best_j)];
       if (!vo_.observe(tp, params_.reperception_matching_error_px, sp)) continue;
       obs_.push_back({pr.id, sp.p_cam, sp.cov});
       obs_uv_.emplace_back(tp.u_px, tp.v_px);
@@ -213,6 +228,25 @@ bool SlamSystem::makeRoom(SlamFrameResult& out) {
   return true;
 }
 
+void SlamSystem::addAnchor(ImageView<const std::uint8_t> left, const TrackPoint& p,
+                           PointTrack& track) {
+  Anchor a;
+  a.x = static_cast<int>(std::lround(p.u_px));
+  a.y = static_cast<int>(std::lround(p.v_px));
+  // At the pixel its disparity was measured at, as for every landmark (below).
+  a.point = reprojectPixel(calib_, static_cast<float>(a.x), static_cast<float>(a.y), p.d_px,
+                           p.sigma_d_px, params_.init_sigma_uv_px);
+  const int big = 2 * params_.patch_half_px, side = 2 * big + 1;
+  const std::size_t o = anchor_patches_.size();
+  anchor_patches_.resize(o + static_cast<std::size_t>(side * side));
+  for (int dy = -big; dy <= big; ++dy)
+    for (int dx = -big; dx <= big; ++dx)
+      anchor_patches_[o + static_cast<std::size_t>((dy + big) * side + dx + big)] =
+          left(std::clamp(a.x + dx, 0, left.width - 1), std::clamp(a.y + dy, 0, left.height - 1));
+  track.anchor = static_cast<int>(anchors_.size());
+  anchors_.push_back(a);
+}
+
 void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameResult& out) {
   const auto& pts = vo_.points();
   const int h = params_.patch_half_px;
@@ -242,6 +276,23 @@ void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameRe
       continue;
     }
     if (!makeRoom(out)) continue;  // stays a candidate
+    if (t.anchor >= 0) {
+      // A first-frame candidate: initialised from that frame, whose pose is exact.
+      const Anchor& a = anchors_[static_cast<std::size_t>(t.anchor)];
+      auto id = ekf_.addLandmarkFromExactPose(anchor_pose_, a.point.p_cam, a.point.cov);
+      t.candidate = false;
+      if (!id) continue;
+      const int big = 2 * h, side = 2 * big + 1;
+      const ImageView<const std::uint8_t> patch(
+          anchor_patches_.data() + static_cast<std::size_t>(t.anchor * side * side), side, side,
+          side);
+      landmarks_.add(*id, frame_, patch, big, big, anchor_pose_, a.point.p_cam);
+      landmarks_.info(*id).anchored = true;
+      anchored_ids_.push_back(*id);
+      landmark_uv_.emplace_back(p.u_px, p.v_px);
+      ++out.added;
+      continue;
+    }
     // Initialised at the pixel its disparity was measured at (the row search runs on the
     // nearest pixel), which is also the centre of its appearance patch.
     const float x = std::round(p.u_px), y = std::round(p.v_px);
@@ -263,7 +314,8 @@ void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameRe
     const PointTrack& t = cur_tracks_[j];
     const int x = static_cast<int>(std::lround(pts[j].u_px));
     const int y = static_cast<int>(std::lround(pts[j].v_px));
-    if (t.track_len == 2 && !t.candidate && patchInside(left, x, y, h + 1) && !nearObserved(pts[j]))
+    if ((t.track_len == 2 || frame_ == 0) && !t.candidate && patchInside(left, x, y, h + 1) &&
+        !nearObserved(pts[j]))
       fresh.push_back(static_cast<int>(j));
   }
   std::sort(fresh.begin(), fresh.end(), [&](int a, int c) {  // ties: ascending index, as inserted
@@ -281,6 +333,7 @@ void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameRe
     const std::size_t c = cellOf(p.u_px, p.v_px);
     if (cell_count_[c] >= params_.max_per_cell) continue;
     cur_tracks_[static_cast<std::size_t>(j)].candidate = true;
+    if (frame_ == 0) addAnchor(left, p, cur_tracks_[static_cast<std::size_t>(j)]);
     ++cell_count_[c];
     ++chosen;
   }

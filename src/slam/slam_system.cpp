@@ -15,7 +15,8 @@ Status SlamSystemParams::validate() const {
     return Status::invalidArgument("slam.candidate_max_sigma_m must be > 0");
   if (grid_cols < 1 || grid_rows < 1 || max_per_cell < 1)
     return Status::invalidArgument("slam.grid_cols, grid_rows and max_per_cell must be >= 1");
-  if (!(init_sigma_uv_px > 0.0)) return Status::invalidArgument("slam.init_sigma_uv_px must be > 0");
+  if (!(init_sigma_uv_px > 0.0))
+    return Status::invalidArgument("slam.init_sigma_uv_px must be > 0");
   if (!(track_matching_error_px > 0.0) || !(reperception_matching_error_px > 0.0))
     return Status::invalidArgument("slam matching errors must be > 0");
   if (!(track_tolerance_px > 0.0) || !(reperception_tolerance_px > 0.0) ||
@@ -63,6 +64,14 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
   landmark_uv_.reserve(lm);
   const int side = 2 * params.patch_half_px + 1;
   tmpl_.resize(static_cast<std::size_t>(side * side));
+  // First-frame candidates: at most max_per_cell per grid cell.
+  const std::size_t n_anchor =
+      static_cast<std::size_t>(params.grid_cols * params.grid_rows * params.max_per_cell);
+  const std::size_t big_side = static_cast<std::size_t>(4 * params.patch_half_px + 1);
+  anchors_.reserve(n_anchor);
+  anchored_ids_.reserve(n_anchor);
+  retired_preds_.reserve(n_anchor);
+  anchor_patches_.reserve(n_anchor * big_side * big_side);
   // A search window is at most (2 reperception_max_radius_px + 1)^2 scores.
   const std::size_t r = static_cast<std::size_t>(std::ceil(params.reperception_max_radius_px));
   scores_.reserve((2 * r + 1) * (2 * r + 1));
@@ -75,7 +84,8 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
 
 bool SlamSystem::nearLandmark(const std::vector<Eigen::Vector2f>& landmarks_uv, float u,
                               float v) const {
-  const float r2 = static_cast<float>(params_.landmark_exclusion_px * params_.landmark_exclusion_px);
+  const float r2 =
+      static_cast<float>(params_.landmark_exclusion_px * params_.landmark_exclusion_px);
   for (const Eigen::Vector2f& l : landmarks_uv) {
     const float du = l.x() - u, dv = l.y() - v;
     if (du * du + dv * dv <= r2) return true;
@@ -97,18 +107,17 @@ void SlamSystem::passTracks() {
   }
 }
 
-Status SlamSystem::process(ImageView<const std::uint8_t> left,
-                           ImageView<const std::uint8_t> right, SlamFrameResult& out,
-                           Executor& executor, StageObserver* observer) {
+Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                           SlamFrameResult& out, Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;
   out = SlamFrameResult{};
   if (Status s = vo_.frontEnd(left, right, out.odometry, executor, observer); !s) return s;
   return afterFrontEnd(left, right, out, executor, observer);
 }
 
-Status SlamSystem::process(ImageView<const std::uint8_t> left,
-                           ImageView<const std::uint8_t> right, const StereoStageOutput& stereo,
-                           SlamFrameResult& out, Executor& executor, StageObserver* observer) {
+Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                           const StereoStageOutput& stereo, SlamFrameResult& out,
+                           Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;
   out = SlamFrameResult{};
   if (Status s = vo_.frontEnd(left, right, stereo, out.odometry, executor, observer); !s) return s;
@@ -130,6 +139,10 @@ Status SlamSystem::afterFrontEnd(ImageView<const std::uint8_t> left,
   landmark_uv_.clear();
   if (frame_ == 0) {
     if (Status s = ekf_.reset(Eigen::Isometry3d::Identity(), Matrix6d::Zero()); !s) return s;
+    anchor_pose_ = ekf_.pose();
+    anchors_.clear();
+    anchor_patches_.clear();
+    anchored_ids_.clear();
   } else {
     Matrix6d R_u = od.covariance;
     if (!od.tracked) {
@@ -138,6 +151,7 @@ Status SlamSystem::afterFrontEnd(ImageView<const std::uint8_t> left,
       R_u.diagonal().tail<3>().setConstant(params_.lost_trans_sigma_m * params_.lost_trans_sigma_m);
     }
     if (Status s = ekf_.predict(od.T_cur_prev, R_u); !s) return s;
+    restoreAnchors(left, out);
     searchLandmarks(left, right, out);
     if (!obs_.empty()) {
       if (Status s = ekf_.update(obs_, results_, &executor); !s) return s;

@@ -28,9 +28,24 @@
 //     candidate_min_frames consecutive frames whose stereo point is precise enough
 //     (sqrt(trace cov) <= candidate_max_sigma_m) is initialised in the filter with the stereo
 //     error alone (init_sigma_uv_px for the image-plane localisation);
+//     The first frame defines the world frame (pose exact, zero covariance): its candidates
+//     are chosen among all its points and, once they pass the same test, initialised from
+//     their first-frame stereo point, patch and pose (EkfSlam::addLandmarkFromExactPose: no
+//     cross covariance with the odometry, which never used them), so the map is anchored to
+//     the true origin rather than to the pose the odometry has drifted to by then;
 //  5. bounded cost: at most ekf.max_landmarks in the state; to make room, the landmark unseen
 //     for the longest time (at least retire_unseen_frames) is retired: removed from the state,
-//     kept in the map with its last estimate.
+//     kept in the map with its last estimate. A retired anchored landmark (step 4) predicted
+//     inside the image is searched like a re-perception (at most max_reperceptions a frame, the
+//     best predicted first) and, when found, put back into the state with its last estimate
+//     and covariance and no cross covariance (EkfSlam::restoreLandmark), then observed with
+//     the re-perception error: this is how a loop closes on the start's map. Leaving out the
+//     correlations it had when retired assumes its error independent of the current state's:
+//     exact for an anchor never updated (initialised from the exact first pose, independent of
+//     the odometry), optimistic by what its updates tied it to the poses that observed it.
+//     Only anchors come back (at most grid_cols x grid_rows x max_per_cell of them, a bounded
+//     cost per frame): any other landmark was initialised from a drifted pose and its error
+//     is mostly the error the current pose shares.
 // Memory: every per-frame buffer is a member sized in the constructor (or grown once to the
 // frame's stereo point count); the map's bookkeeping is preallocated for map_reserve landmarks.
 // Once warm, a frame allocates nothing while fewer than map_reserve landmarks have ever been
@@ -46,6 +61,7 @@
 #include "core/image.hpp"
 #include "core/stage_observer.hpp"
 #include "core/status.hpp"
+#include "features/patch_similarity.hpp"
 #include "odometry/stereo_odometry.hpp"
 #include "slam/ekf_slam.hpp"
 #include "slam/landmark_manager.hpp"
@@ -98,6 +114,7 @@ struct SlamFrameResult {
   int gated = 0;              // observations rejected by the chi-square gate
   int added = 0;
   int retired = 0;
+  int restored = 0;  // retired anchored landmarks put back into the state
   int candidates = 0;
   int vme_matches = 0;  // matches given to the VME (non-landmarks)
 };
@@ -131,7 +148,12 @@ class SlamSystem {
   void searchLandmarks(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                        SlamFrameResult& out);
   void selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameResult& out);
+  // Records first-frame candidate p (stereo point and patch of `left`) as an anchor of `track`.
+  void addAnchor(ImageView<const std::uint8_t> left, const TrackPoint& p, PointTrack& track);
   bool makeRoom(SlamFrameResult& out);
+  // Brings retired anchored landmarks predicted in the current image and found there back into
+  // the state (step 5); they are then observed as re-perceptions by searchLandmarks.
+  void restoreAnchors(ImageView<const std::uint8_t> left, SlamFrameResult& out);
 
   // A landmark of the state predicted inside the current image (searchLandmarks).
   struct SearchPrediction {
@@ -143,6 +165,17 @@ class SlamSystem {
     bool tracked = false;                             // observed in the previous frame
     int order = 0;  // position in the state: ties keep it (std::sort, no buffer)
   };
+
+  // Projection of landmark m (world, m, covariance C) into the current left image from T_wc
+  // with pose covariance P_pose: fills pr's pixel, disparity, camera point and sigmas; false
+  // when the landmark is behind the camera or outside the image (minus the patch border).
+  bool predictLandmark(const Eigen::Vector3d& m, const Eigen::Matrix3d& C,
+                       const Eigen::Isometry3d& T_wc, const Matrix6d& P_pose,
+                       SearchPrediction& pr) const;
+  // The current stereo point within r px of pr's pixel whose ZNCC against `patch` is highest
+  // and at least reperception_min_zncc; -1 when none.
+  int bestStereoPoint(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> patch,
+                      const PatchStats& ps, const SearchPrediction& pr, int r) const;
 
   SlamSystemParams params_;
   StereoCalibration calib_;
@@ -158,10 +191,20 @@ class SlamSystem {
   std::vector<Eigen::Vector2f> prev_landmark_uv_, landmark_uv_;  // observed landmarks, px
   std::vector<ObservationResult> results_;
   std::vector<float> scores_;
-  std::vector<SearchPrediction> preds_;  // landmarks predicted in the image, this frame
-  std::vector<int> fresh_;               // points matched for the first time, this frame
-  std::vector<std::uint8_t> tmpl_;       // warped landmark template
+  std::vector<SearchPrediction> preds_;          // landmarks predicted in the image, this frame
+  std::vector<SearchPrediction> retired_preds_;  // retired anchors predicted in the image
+  std::vector<int> fresh_;                       // points matched for the first time, this frame
+  std::vector<std::uint8_t> tmpl_;               // warped landmark template
   std::vector<int> cell_count_;
+  // A first-frame candidate (step 4): its stereo point and appearance patch of that frame.
+  struct Anchor {
+    StereoPoint point;  // first left camera frame = world frame, m
+    int x = 0, y = 0;   // pixel it was measured at
+  };
+  std::vector<Anchor> anchors_;
+  std::vector<std::uint8_t> anchor_patches_;  // (4 patch_half_px + 1)^2 bytes per anchor
+  Eigen::Isometry3d anchor_pose_ = Eigen::Isometry3d::Identity();  // T_world_cam, first frame
+  std::vector<int> anchored_ids_;  // ids of the landmarks initialised from anchors
   int frame_ = 0;
 };
 

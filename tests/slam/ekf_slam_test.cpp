@@ -1,7 +1,8 @@
 // EKF SLAM core (seed 001 sec. 4): exact composition of noise-free predictions, the sparse update
 // against a dense textbook reference, gating of a planted outlier, positive definiteness over
-// many updates, landmark removal, the loop behaviour and bad-argument rejection. Jacobians:
-// pose_jacobians_test.cpp; Monte Carlo consistency: ekf_slam_consistency_test.cpp.
+// many updates, landmark removal, landmarks from an exact pose, restoration, the loop behaviour and
+// bad-argument rejection. Jacobians: pose_jacobians_test.cpp; Monte Carlo consistency:
+// ekf_slam_consistency_test.cpp.
 #include "slam/ekf_slam.hpp"
 
 #include <gtest/gtest.h>
@@ -232,6 +233,75 @@ TEST(EkfSlam, RemoveLandmarkReturnsItsEstimateAndKeepsTheRest) {
 
 // Loop: landmarks near the start, a long excursion with prediction only, then re-perception of
 // the first landmarks (1 px matching error, seed 001 sec. 4.1): the pose covariance shrinks.
+// A landmark measured from an exactly known pose: the same as addLandmark on a filter whose
+// pose covariance is zero (eqs. 4-5 with P_pose = 0), with no cross covariance.
+TEST(EkfSlam, LandmarkFromExactPoseIsIndependentOfTheState) {
+  std::mt19937 rng(11);
+  EkfSlam ekf = filledFilter(4, rng);
+  const Isometry3d T0 = pose({0.05, -0.1, 0.2}, {2, -1, 0.5});
+  const Vector3d z(1.5, -0.7, 12.0);
+  const Matrix3d R_z = stereoCov(z);
+  const int id = ekf.addLandmarkFromExactPose(T0, z, R_z).value();
+  EkfSlam ref{EkfSlamParams{}};
+  ASSERT_TRUE(ref.reset(T0, Matrix6d::Zero()).isOk());
+  const int ref_id = ref.addLandmark(z, R_z).value();
+  Vector3d m, m_ref;
+  Matrix3d C, C_ref;
+  ASSERT_TRUE(ekf.landmark(id, m, C).isOk());
+  ASSERT_TRUE(ref.landmark(ref_id, m_ref, C_ref).isOk());
+  EXPECT_LT((m - m_ref).norm(), 1e-12);
+  EXPECT_LT((C - C_ref).norm(), 1e-15);
+  const MatrixXd P = ekf.covariance();
+  const int o = 6 + 3 * 4;
+  EXPECT_EQ(P.block(o, 0, 3, o).norm(), 0.0);
+  EXPECT_EQ(P.block(0, o, o, 3).norm(), 0.0);
+  EXPECT_EQ(ekf.addLandmarkFromExactPose(T0, Vector3d(0, NAN, 5), R_z).status().code(),
+            StatusCode::kInvalidArgument);
+  EkfSlamParams small;
+  small.max_landmarks = 1;
+  EkfSlam full(small);
+  ASSERT_TRUE(full.addLandmarkFromExactPose(T0, z, R_z).isOk());
+  EXPECT_EQ(full.addLandmarkFromExactPose(T0, z, R_z).status().code(),
+            StatusCode::kFailedPrecondition);
+}
+
+// A removed landmark comes back under its id with the estimate it left with, no cross
+// covariance, and takes part in updates again.
+TEST(EkfSlam, RestoredLandmarkComesBackUnderItsId) {
+  std::mt19937 rng(12);
+  std::vector<Vector3d> truth;
+  EkfSlam ekf = filledFilter(5, rng, &truth);
+  const std::vector<int> ids = ekf.landmarkIds();
+  Vector3d m;
+  Matrix3d C;
+  ASSERT_TRUE(ekf.removeLandmark(ids[2], &m, &C).isOk());
+  ASSERT_TRUE(ekf.predict(pose({0.01, 0, 0.02}, {0.3, 0.1, 0}), motionCov()).isOk());
+  EXPECT_EQ(ekf.restoreLandmark(ids[3], m, C).code(), StatusCode::kFailedPrecondition);
+  EXPECT_EQ(ekf.restoreLandmark(999, m, C).code(), StatusCode::kNotFound);
+  EXPECT_EQ(ekf.restoreLandmark(ids[2], Vector3d(NAN, 0, 0), C).code(),
+            StatusCode::kInvalidArgument);
+  ASSERT_TRUE(ekf.restoreLandmark(ids[2], m, C).isOk());
+  EXPECT_EQ(ekf.restoreLandmark(ids[2], m, C).code(), StatusCode::kFailedPrecondition);
+  Vector3d m2;
+  Matrix3d C2;
+  ASSERT_TRUE(ekf.landmark(ids[2], m2, C2).isOk());
+  EXPECT_EQ(m2, m);
+  EXPECT_EQ(C2, C);
+  const MatrixXd P = ekf.covariance();
+  const int o = 6 + 3 * 4;  // the last slot
+  EXPECT_EQ(P.block(o, 0, 3, o).norm(), 0.0);
+  // Observed at its true position from the current pose, it updates the filter.
+  const Vector3d z = ekf.pose().inverse() * truth[2];
+  std::vector<ObservationResult> res;
+  ASSERT_TRUE(ekf.update({{ids[2], z, stereoCov(z)}}, res).isOk());
+  EXPECT_TRUE(res[0].accepted);
+  ASSERT_TRUE(ekf.landmark(ids[2], m2, C2).isOk());
+  EXPECT_LT(C2.trace(), C.trace());
+  const MatrixXd Pu = ekf.covariance();
+  EXPECT_LT((Pu - Pu.transpose()).norm(), 1e-12);
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<MatrixXd>(Pu).eigenvalues().minCoeff(), 0.0);
+}
+
 TEST(EkfSlam, ReobservingFirstLandmarksAfterALoopShrinksPoseCovariance) {
   std::mt19937 rng(29);
   std::uniform_real_distribution<double> ux(-6, 6), uy(-3, 3), uz(8, 20);

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -24,6 +25,7 @@ struct RunOut {
   std::vector<TimeNs> t_ns;
   int max_in_state = 0;
   int reperceived = 0;
+  int restored = 0;  // anchored landmarks put back into the state
   std::vector<MapLandmark> map;
 };
 
@@ -49,6 +51,7 @@ RunOut runSlam(const std::string& spec, const SlamSystemParams& sp, int max_fram
     r.t_ns.push_back(f.t_ns);
     r.max_in_state = std::max(r.max_in_state, out.landmarks_in_state);
     r.reperceived += out.reperceived;
+    r.restored += out.restored;
     Eigen::Isometry3d g;
     if ((*src)->groundTruth(f.index, g)) r.gt.push_back(g);
   }
@@ -107,20 +110,30 @@ TEST(SlamSystem, SyntheticBlimpLoopWithinTargetsAndBetterThanOdometry) {
       M_PI;
   auto nees = evaluateNees(r.gt, r.est, r.cov);
   ASSERT_TRUE(nees.isOk()) << nees.status().message();
+  // Position covariance: its largest trace over the flight and at the end of the loop.
+  double trace_max = 0.0;
+  for (const Matrix6d& c : r.cov)
+    trace_max = std::max(trace_max, c.bottomRightCorner<3, 3>().trace());
+  const double trace_end = r.cov.back().bottomRightCorner<3, 3>().trace();
   std::printf(
       "blimp loop 512x384: final position error EKF %.4f m, VO %.4f m; rms over the "
       "frames EKF %.4f m, VO %.4f m; attitude %.3f deg; mean NEES %.2f, position within "
-      "2 sigma %.1f %% of frames; max landmarks in state %d, re-perceived %d\n",
+      "2 sigma %.1f %% of frames; max landmarks in state %d, re-perceived %d, anchors restored "
+      "%d; position covariance trace max %.3g, at the end %.3g m^2\n",
       e_slam, e_vo, rms_slam, rms_vo, att_slam, nees->mean_nees, nees->position_within_2sigma_pct,
-      r.max_in_state, r.reperceived);
+      r.max_in_state, r.reperceived, r.restored, trace_max, trace_end);
   EXPECT_LE(e_slam, 0.15);
   EXPECT_LE(att_slam, 0.5);
-  // The issue asks for 3x better than odometry at the end of the loop. Measured on this seed:
-  // final 0.0111 m against 0.0276 m (2.5x), rms over the frames 0.0148 m against 0.0294 m
-  // (2.0x); over seeds 1-6 the final-frame ratio ranges 0.9-4.3 (docs/slam.md), so the test
-  // holds the filter to 1.5x better than odometry on the rms of every frame's error (far less
-  // noisy than the one final frame): a regression of the filter shows.
-  EXPECT_LE(rms_slam * 1.5, rms_vo);
+  // The issue's 3x better than odometry at the end of the loop. Measured on this seed (session
+  // 10, first-frame anchors brought back on the loop): final 0.0049 m against 0.0276 m (5.6x),
+  // rms over the frames 0.0115 m against 0.0294 m (2.6x); over seeds 1-6 the final-frame ratio
+  // ranges 1.7-13.7 (docs/slam.md).
+  EXPECT_LE(e_slam * 3.0, e_vo);
+  EXPECT_LE(rms_slam * 2.0, rms_vo);
+  // The loop closes on the first frame's landmarks: they come back into the state and the
+  // position covariance shrinks visibly from its largest value (measured: 4.2x).
+  EXPECT_GT(r.restored, 0);
+  EXPECT_LE(trace_end * 2.0, trace_max);
   EXPECT_GE(nees->position_within_2sigma_pct, 90.0);
   EXPECT_GT(r.reperceived, 0);
   EXPECT_LE(r.max_in_state, SlamSystemParams{}.ekf.max_landmarks);
@@ -137,16 +150,21 @@ TEST(SlamSystem, SyntheticBlimpLoopWithinTargetsAndBetterThanOdometry) {
 TEST(SlamSystem, SmallLandmarkCapIsRespected) {
   SlamSystemParams p;
   p.ekf.max_landmarks = 20;
-  const RunOut r = runSlam("synthetic:width=320,height=240", p, 25);
-  ASSERT_EQ(r.est.size(), 25u);
+  const RunOut r = runSlam("synthetic:width=320,height=240,frames=30", p);
+  ASSERT_EQ(r.est.size(), 30u);
   EXPECT_LE(r.max_in_state, 20);
   EXPECT_GE(r.map.size(), static_cast<std::size_t>(r.max_in_state));  // retired ones stay
+  // On this fast loop (30 frames) first-frame landmarks leave the state and come back.
+  EXPECT_GT(r.restored, 0);
 }
 
 TEST(SlamSystem, SameInputSameOutput) {
-  const RunOut a = runSlam("synthetic:width=320,height=240", SlamSystemParams{}, 12);
-  const RunOut b = runSlam("synthetic:width=320,height=240", SlamSystemParams{}, 12);
+  SlamSystemParams p;
+  p.ekf.max_landmarks = 20;  // retirements and restorations (the fast loop above)
+  const RunOut a = runSlam("synthetic:width=320,height=240,frames=30", p);
+  const RunOut b = runSlam("synthetic:width=320,height=240,frames=30", p);
   ASSERT_EQ(a.est.size(), b.est.size());
+  EXPECT_GT(a.restored, 0);
   for (std::size_t i = 0; i < a.est.size(); ++i) {
     EXPECT_TRUE(a.est[i].matrix() == b.est[i].matrix()) << "frame " << i;
     EXPECT_TRUE(a.cov[i] == b.cov[i]) << "frame " << i;

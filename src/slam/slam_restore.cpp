@@ -1,0 +1,58 @@
+// SlamSystem, the return of retired anchors (step 5 of slam_system.hpp): a first-frame landmark
+// retired to bound the state is searched again whenever it is predicted inside the current
+// image, and put back into the state when it is found, so that a loop closes on the landmarks of
+// its start.
+#include <algorithm>
+#include <cmath>
+
+#include "slam/slam_system.hpp"
+
+namespace svslam {
+
+void SlamSystem::restoreAnchors(ImageView<const std::uint8_t> left, SlamFrameResult& out) {
+  if (params_.max_reperceptions == 0) return;
+  const int h = params_.patch_half_px;
+  const Eigen::Isometry3d T_wc = ekf_.pose();
+  const Matrix6d P_pose = ekf_.poseCovariance();
+  std::vector<SearchPrediction>& preds = retired_preds_;
+  preds.clear();
+  for (const int id : anchored_ids_) {
+    const MapLandmark& lm = landmarks_.info(id);
+    if (lm.active) continue;
+    SearchPrediction pr;
+    if (!predictLandmark(lm.p_world, lm.cov, T_wc, P_pose, pr)) continue;
+    pr.id = lm.id;
+    preds.push_back(pr);
+  }
+  // The best predicted first (they are the most likely found, and the most precise); ties by id.
+  std::sort(preds.begin(), preds.end(), [](const SearchPrediction& a, const SearchPrediction& c) {
+    if (a.sigma_px != c.sigma_px) return a.sigma_px < c.sigma_px;
+    return a.id < c.id;
+  });
+  const int side = 2 * h + 1;
+  int searched = 0;
+  for (const SearchPrediction& pr : preds) {
+    if (searched >= params_.max_reperceptions) break;
+    if (!std::isfinite(pr.sigma_px)) continue;
+    ++searched;
+    const int r =
+        static_cast<int>(std::ceil(std::min(params_.reperception_tolerance_px + 3.0 * pr.sigma_px,
+                                            params_.reperception_max_radius_px)));
+    tmpl_.resize(static_cast<std::size_t>(side * side));
+    if (!landmarks_.templateFor(pr.id, T_wc.linear(), pr.z_cam, calib_.f_px, tmpl_.data()))
+      continue;
+    const ImageView<const std::uint8_t> patch(tmpl_.data(), side, side, side);
+    const PatchStats ps = patchStats(patch, h, h, h);
+    if (ps.inv_norm == 0.0) continue;
+    if (bestStereoPoint(left, patch, ps, pr, r) < 0) continue;
+    if (!makeRoom(out)) break;
+    MapLandmark& lm = landmarks_.info(pr.id);
+    if (!ekf_.restoreLandmark(pr.id, lm.p_world, lm.cov)) continue;
+    lm.active = true;
+    // Not retired again this frame (makeRoom), searched as a re-perception (not tracked).
+    lm.last_seen_frame = frame_;
+    ++out.restored;
+  }
+}
+
+}  // namespace svslam
