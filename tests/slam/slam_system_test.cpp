@@ -131,7 +131,7 @@ TEST(SlamSystem, SyntheticBlimpLoopWithinTargetsAndBetterThanOdometry) {
   EXPECT_LE(e_slam * 3.0, e_vo);
   EXPECT_LE(rms_slam * 2.0, rms_vo);
   // The loop closes on the first frame's landmarks: they come back into the state and the
-  // position covariance shrinks visibly from its largest value (measured: 4.2x).
+  // position covariance shrinks visibly from its largest value (measured: 3.4x).
   EXPECT_GT(r.restored, 0);
   EXPECT_LE(trace_end * 2.0, trace_max);
   EXPECT_GE(nees->position_within_2sigma_pct, 90.0);
