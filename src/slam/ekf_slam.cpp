@@ -349,9 +349,7 @@ Result<int> EkfSlam::addLandmark(const Eigen::Vector3d& z_cam, const Eigen::Matr
   if (!init_status_) return init_status_;
   if (!z_cam.allFinite()) return Status::invalidArgument("addLandmark: z_cam is not finite");
   if (Status s = checkCovariance<3>(R_z, false, "addLandmark: R_z"); !s) return s;
-  if (numLandmarks() >= params_.max_landmarks)
-    return Status::failedPrecondition("addLandmark: the state holds max_landmarks = " +
-                                      std::to_string(params_.max_landmarks) + " landmarks");
+  if (Status s = checkRoom("addLandmark"); !s) return s;
   Matrix36d G_x;
   Eigen::Matrix3d G_z;
   initJacobians(T_world_cam_, z_cam, G_x, G_z);
@@ -375,17 +373,10 @@ Result<int> EkfSlam::addLandmarkFromExactPose(const Eigen::Isometry3d& T_world_c
   if (!z_cam.allFinite() || !T_world_cam_exact.matrix().allFinite())
     return Status::invalidArgument("addLandmarkFromExactPose: z_cam or the pose is not finite");
   if (Status s = checkCovariance<3>(R_z, false, "addLandmarkFromExactPose: R_z"); !s) return s;
-  if (numLandmarks() >= params_.max_landmarks)
-    return Status::failedPrecondition("addLandmarkFromExactPose: the state holds max_landmarks = " +
-                                      std::to_string(params_.max_landmarks) + " landmarks");
-  const int n = stateDim(), s = numLandmarks(), o = n;
+  if (Status s = checkRoom("addLandmarkFromExactPose"); !s) return s;
   const Eigen::Matrix3d R = T_world_cam_exact.linear();
-  P_.block(o, 0, 3, n).setZero();
-  P_.block<3, 3>(o, o) = R * R_z * R.transpose();
-  m_world_.col(s) = initLandmark(T_world_cam_exact, z_cam);
   const int id = next_id_++;
-  ids_.push_back(id);
-  slot_of_id_.push_back(s);
+  appendUncorrelated(id, initLandmark(T_world_cam_exact, z_cam), R * R_z * R.transpose());
   return id;
 }
 
@@ -400,16 +391,28 @@ Status EkfSlam::restoreLandmark(int id, const Eigen::Vector3d& m_world,
   if (!m_world.allFinite())
     return Status::invalidArgument("restoreLandmark: m_world is not finite");
   if (Status s = checkCovariance<3>(cov, false, "restoreLandmark: cov"); !s) return s;
-  if (numLandmarks() >= params_.max_landmarks)
-    return Status::failedPrecondition("restoreLandmark: the state holds max_landmarks = " +
-                                      std::to_string(params_.max_landmarks) + " landmarks");
-  const int n = stateDim(), s = numLandmarks(), o = n;
-  P_.block(o, 0, 3, n).setZero();
-  P_.block<3, 3>(o, o) = cov;
+  if (Status s = checkRoom("restoreLandmark"); !s) return s;
+  appendUncorrelated(id, m_world, cov);
+  return Status::ok();
+}
+
+Status EkfSlam::checkRoom(const char* what) const {
+  if (numLandmarks() < params_.max_landmarks) return Status::ok();
+  return Status::failedPrecondition(std::string(what) + ": the state holds max_landmarks = " +
+                                    std::to_string(params_.max_landmarks) + " landmarks");
+}
+
+void EkfSlam::appendUncorrelated(int id, const Eigen::Vector3d& m_world,
+                                 const Eigen::Matrix3d& cov) {
+  const int n = stateDim(), s = numLandmarks();
+  P_.block(n, 0, 3, n).setZero();
+  P_.block<3, 3>(n, n) = cov;
   m_world_.col(s) = m_world;
   ids_.push_back(id);
-  slot_of_id_[static_cast<std::size_t>(id)] = s;
-  return Status::ok();
+  if (id == static_cast<int>(slot_of_id_.size()))
+    slot_of_id_.push_back(s);
+  else
+    slot_of_id_[static_cast<std::size_t>(id)] = s;
 }
 
 Status EkfSlam::removeLandmark(int id, Eigen::Vector3d* m_world, Eigen::Matrix3d* cov) {

@@ -151,6 +151,11 @@ class EkfSlam {
 
  private:
   int slotOf(int id) const;
+  // failedPrecondition naming `what` when the state holds max_landmarks landmarks.
+  Status checkRoom(const char* what) const;
+  // Appends landmark `id` at m_world (m) with covariance cov (m^2) and no cross covariance.
+  // Preconditions: checkRoom passed; id is the next new id (slot_of_id_.size()) or a removed one.
+  void appendUncorrelated(int id, const Eigen::Vector3d& m_world, const Eigen::Matrix3d& cov);
   // out.topRows(n) = columns [c0, c0 + k) of the full P, from the stored lower triangle.
   void gatherColumns(int c0, int k, Eigen::MatrixXd& out) const;
   Status checkObservations(const std::vector<LandmarkObservation>& obs) const;

@@ -57,6 +57,15 @@ bool SlamSystem::predictLandmark(const Eigen::Vector3d& m, const Eigen::Matrix3d
   return true;
 }
 
+bool SlamSystem::warpTemplate(const SearchPrediction& pr, const Eigen::Matrix3d& R_world_cam,
+                              PatchStats& ps) {
+  if (!landmarks_.templateFor(pr.id, R_world_cam, pr.z_cam, calib_.f_px, tmpl_.data()))
+    return false;
+  const int h = params_.patch_half_px;
+  ps = patchStats(templateView(), h, h, h);
+  return ps.inv_norm != 0.0;
+}
+
 int SlamSystem::bestStereoPoint(ImageView<const std::uint8_t> left,
                                 ImageView<const std::uint8_t> patch, const PatchStats& ps,
                                 const SearchPrediction& pr, int r) const {
@@ -127,14 +136,9 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     const int y0 = std::max(h + 1, static_cast<int>(std::lround(pr.v)) - r);
     const int y1 = std::min(calib_.height - h - 2, static_cast<int>(std::lround(pr.v)) + r);
     if (x1 < x0 || y1 < y0) continue;
-    // The landmark's patch warped to the predicted view.
-    const int side = 2 * h + 1;
-    tmpl_.resize(static_cast<std::size_t>(side * side));
-    if (!landmarks_.templateFor(pr.id, T_wc.linear(), pr.z_cam, calib_.f_px, tmpl_.data()))
-      continue;
-    const ImageView<const std::uint8_t> patch(tmpl_.data(), side, side, side);
-    const PatchStats ps = patchStats(patch, h, h, h);
-    if (ps.inv_norm == 0.0) continue;
+    PatchStats ps;
+    if (!warpTemplate(pr, T_wc.linear(), ps)) continue;
+    const ImageView<const std::uint8_t> patch = templateView();
     if (!pr.tracked) {
       // Re-perception: among this frame's stereo points near the prediction (cheap, and the
       // point already has its disparity).

@@ -11,7 +11,6 @@ namespace svslam {
 
 void SlamSystem::restoreAnchors(ImageView<const std::uint8_t> left, SlamFrameResult& out) {
   if (params_.max_reperceptions == 0) return;
-  const int h = params_.patch_half_px;
   const Eigen::Isometry3d T_wc = ekf_.pose();
   const Matrix6d P_pose = ekf_.poseCovariance();
   std::vector<SearchPrediction>& preds = retired_preds_;
@@ -20,7 +19,8 @@ void SlamSystem::restoreAnchors(ImageView<const std::uint8_t> left, SlamFrameRes
     const MapLandmark& lm = landmarks_.info(id);
     if (lm.active) continue;
     SearchPrediction pr;
-    if (!predictLandmark(lm.p_world, lm.cov, T_wc, P_pose, pr)) continue;
+    if (!predictLandmark(lm.p_world, lm.cov, T_wc, P_pose, pr) || !std::isfinite(pr.sigma_px))
+      continue;
     pr.id = lm.id;
     preds.push_back(pr);
   }
@@ -29,22 +29,16 @@ void SlamSystem::restoreAnchors(ImageView<const std::uint8_t> left, SlamFrameRes
     if (a.sigma_px != c.sigma_px) return a.sigma_px < c.sigma_px;
     return a.id < c.id;
   });
-  const int side = 2 * h + 1;
   int searched = 0;
   for (const SearchPrediction& pr : preds) {
     if (searched >= params_.max_reperceptions) break;
-    if (!std::isfinite(pr.sigma_px)) continue;
     ++searched;
     const int r =
         static_cast<int>(std::ceil(std::min(params_.reperception_tolerance_px + 3.0 * pr.sigma_px,
                                             params_.reperception_max_radius_px)));
-    tmpl_.resize(static_cast<std::size_t>(side * side));
-    if (!landmarks_.templateFor(pr.id, T_wc.linear(), pr.z_cam, calib_.f_px, tmpl_.data()))
-      continue;
-    const ImageView<const std::uint8_t> patch(tmpl_.data(), side, side, side);
-    const PatchStats ps = patchStats(patch, h, h, h);
-    if (ps.inv_norm == 0.0) continue;
-    if (bestStereoPoint(left, patch, ps, pr, r) < 0) continue;
+    PatchStats ps;
+    if (!warpTemplate(pr, T_wc.linear(), ps)) continue;
+    if (bestStereoPoint(left, templateView(), ps, pr, r) < 0) continue;
     if (!makeRoom(out)) break;
     MapLandmark& lm = landmarks_.info(pr.id);
     if (!ekf_.restoreLandmark(pr.id, lm.p_world, lm.cov)) continue;

@@ -172,6 +172,13 @@ class SlamSystem {
   bool predictLandmark(const Eigen::Vector3d& m, const Eigen::Matrix3d& C,
                        const Eigen::Isometry3d& T_wc, const Matrix6d& P_pose,
                        SearchPrediction& pr) const;
+  // Warps the patch of landmark pr.id to its predicted view (LandmarkManager::templateFor) into
+  // tmpl_, with its statistics; false when the warp fails or the template is flat.
+  bool warpTemplate(const SearchPrediction& pr, const Eigen::Matrix3d& R_world_cam, PatchStats& ps);
+  ImageView<const std::uint8_t> templateView() const {
+    const int side = 2 * params_.patch_half_px + 1;
+    return ImageView<const std::uint8_t>(tmpl_.data(), side, side, side);
+  }
   // The current stereo point within r px of pr's pixel whose ZNCC against `patch` is highest
   // and at least reperception_min_zncc; -1 when none.
   int bestStereoPoint(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> patch,
