@@ -37,7 +37,7 @@ struct StereoOdometryParams {
   double min_disparity_px = 1.0;  // points with a smaller disparity are not used, px, > 0
   double max_depth_m = 1e9;       // points farther than this are not used, m, > 0
   int min_matches = 12;           // temporal matches needed before a retry, >= 3
-  float lost_search_radius_px = 100.0f;  // search radius of the retry, px, > 0
+  float lost_search_radius_px = 100.0f;  // retry and first-pair search radius, px, > 0
   Status validate() const;
 };
 

@@ -45,6 +45,7 @@ void StereoOdometry::resetTracking() {
   prev_clusters_.clear();
   cur_clusters_.clear();
   last_motion_ = Eigen::Isometry3d::Identity();
+  motion_known_ = false;
 }
 
 void StereoOdometry::buildPoints() {
@@ -198,8 +199,11 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
   matches_.clear();
   if (has_prev_) {
     const PinholeCamera cam = calib_.leftCamera();
+    // Without a measured motion yet (the first pair, or after a reset) the identity prediction
+    // is searched as widely as a retry after a loss.
+    const float radius = motion_known_ ? 0.0f : params_.lost_search_radius_px;
     Status s = temporal_matcher_.process(prev_left_.cview(), prev_, left, cur_, last_motion_, cam,
-                                         matches_, out.temporal_stats, 0.0f,
+                                         matches_, out.temporal_stats, radius,
                                          have_rois_ ? &regions_ : nullptr);
     if (!s) return s;
     if (static_cast<int>(matches_.size()) < params_.min_matches) {
@@ -254,6 +258,7 @@ Status StereoOdometry::estimateMotion(const std::vector<std::uint8_t>* exclude,
       out.failure.assign("motion estimation: non-finite result");
     } else {
       out.tracked = true;
+      motion_known_ = true;
       T_cur_prev = vm.T_cur_prev;
       out.covariance = vm.covariance;
       out.inliers = vm.used;

@@ -12,7 +12,9 @@
 //     triangulation Jacobian with sigma_d and the image-plane matching error match_sigma_px;
 //  4. temporal matching against the previous frame's points, around the position predicted
 //     with the previous motion (constant velocity); on too few matches, retried with the
-//     identity prediction and lost_search_radius_px;
+//     identity prediction and lost_search_radius_px. Before any motion has been measured (the
+//     first pair, or after resetTracking) the identity is searched with lost_search_radius_px
+//     straight away;
 //  5. visual motion estimation (motion/visual_motion.hpp) -> T_cur_prev and its covariance.
 // Poses: T_first_cam = T_first_prev * T_cur_prev^-1 (left camera in the first left camera's
 // frame, x right, y down, z forward). A frame whose motion cannot be estimated keeps the
@@ -136,6 +138,7 @@ class StereoOdometry {
   bool has_prev_ = false;
   int frame_ = 0;
   Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();
+  bool motion_known_ = false;  // last_motion_ was measured (not the initial identity)
   Eigen::Isometry3d T_first_cam_ = Eigen::Isometry3d::Identity();
 };
 
