@@ -235,10 +235,9 @@ bool SlamSystem::makeRoom(SlamFrameResult& out) {
 void SlamSystem::addAnchor(ImageView<const std::uint8_t> left, const TrackPoint& p,
                            PointTrack& track) {
   Anchor a;
-  a.x = static_cast<int>(std::lround(p.u_px));
-  a.y = static_cast<int>(std::lround(p.v_px));
+  const int x = static_cast<int>(std::lround(p.u_px)), y = static_cast<int>(std::lround(p.v_px));
   // At the pixel its disparity was measured at, as for every landmark (below).
-  a.point = reprojectPixel(calib_, static_cast<float>(a.x), static_cast<float>(a.y), p.d_px,
+  a.point = reprojectPixel(calib_, static_cast<float>(x), static_cast<float>(y), p.d_px,
                            p.sigma_d_px, params_.init_sigma_uv_px);
   const int big = 2 * params_.patch_half_px, side = 2 * big + 1;
   const std::size_t o = anchor_patches_.size();
@@ -246,7 +245,7 @@ void SlamSystem::addAnchor(ImageView<const std::uint8_t> left, const TrackPoint&
   for (int dy = -big; dy <= big; ++dy)
     for (int dx = -big; dx <= big; ++dx)
       anchor_patches_[o + static_cast<std::size_t>((dy + big) * side + dx + big)] =
-          left(std::clamp(a.x + dx, 0, left.width - 1), std::clamp(a.y + dy, 0, left.height - 1));
+          left(std::clamp(x + dx, 0, left.width - 1), std::clamp(y + dy, 0, left.height - 1));
   track.anchor = static_cast<int>(anchors_.size());
   anchors_.push_back(a);
 }

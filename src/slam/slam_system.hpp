@@ -203,10 +203,10 @@ class SlamSystem {
   std::vector<int> fresh_;                       // points matched for the first time, this frame
   std::vector<std::uint8_t> tmpl_;               // warped landmark template
   std::vector<int> cell_count_;
-  // A first-frame candidate (step 4): its stereo point and appearance patch of that frame.
+  // A first-frame candidate (step 4): its stereo point of that frame (its appearance patch is
+  // in anchor_patches_).
   struct Anchor {
     StereoPoint point;  // first left camera frame = world frame, m
-    int x = 0, y = 0;   // pixel it was measured at
   };
   std::vector<Anchor> anchors_;
   std::vector<std::uint8_t> anchor_patches_;  // (4 patch_half_px + 1)^2 bytes per anchor
