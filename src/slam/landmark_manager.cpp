@@ -29,11 +29,15 @@ void LandmarkManager::add(int id, int frame, ImageView<const std::uint8_t> img, 
   m.last_seen_frame = frame;
   info_[k] = m;
   views_[k] = {T_world_cam.linear(), p_cam};
-  const int s = 2 * big_ + 1;
-  std::uint8_t* p = patches_.data() + k * patchBytes();
-  for (int dy = -big_; dy <= big_; ++dy)
-    for (int dx = -big_; dx <= big_; ++dx)
-      p[(dy + big_) * s + dx + big_] =
+  copyPatch(img, x, y, big_, patches_.data() + k * patchBytes());
+}
+
+void LandmarkManager::copyPatch(ImageView<const std::uint8_t> img, int x, int y, int half,
+                                std::uint8_t* out) {
+  const int s = 2 * half + 1;
+  for (int dy = -half; dy <= half; ++dy)
+    for (int dx = -half; dx <= half; ++dx)
+      out[(dy + half) * s + dx + half] =
           img(std::clamp(x + dx, 0, img.width - 1), std::clamp(y + dy, 0, img.height - 1));
 }
 

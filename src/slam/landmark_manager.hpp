@@ -26,7 +26,7 @@ namespace svslam {
 struct PointTrack {
   int track_len = 1;  // consecutive frames in which this point was matched
   bool candidate = false;
-  int anchor = -1;  // a candidate of the first frame: its index in SlamSystem's anchors
+  int anchor = -1;  // a candidate of the first frame: its index in SlamSystem's anchor_points_
 };
 
 struct MapLandmark {
@@ -51,6 +51,10 @@ class LandmarkManager {
   // T_world_cam at p_cam (metres); the stored patch has half size 2 h (room for rotations).
   void add(int id, int frame, ImageView<const std::uint8_t> img, int x, int y,
            const Eigen::Isometry3d& T_world_cam, const Eigen::Vector3d& p_cam);
+  // Copies the (2 half + 1)^2 patch of `img` centred on (x, y), row-major, into `out`; pixels
+  // beyond the border repeat the nearest edge pixel.
+  static void copyPatch(ImageView<const std::uint8_t> img, int x, int y, int half,
+                        std::uint8_t* out);
   // The (2h+1)^2 template of landmark `id` as it should look from a camera with rotation
   // R_world_cam where the landmark is at p_cam_now (metres): the stored patch warped by the
   // affine map of a surface element facing the initial camera,

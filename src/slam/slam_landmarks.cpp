@@ -57,6 +57,11 @@ bool SlamSystem::predictLandmark(const Eigen::Vector3d& m, const Eigen::Matrix3d
   return true;
 }
 
+int SlamSystem::searchRadius(const SearchPrediction& pr, double tolerance_px) const {
+  return static_cast<int>(
+      std::ceil(std::min(tolerance_px + 3.0 * pr.sigma_px, params_.reperception_max_radius_px)));
+}
+
 bool SlamSystem::warpTemplate(const SearchPrediction& pr, const Eigen::Matrix3d& R_world_cam,
                               PatchStats& ps) {
   if (!landmarks_.templateFor(pr.id, R_world_cam, pr.z_cam, calib_.f_px, tmpl_.data()))
@@ -129,8 +134,7 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     if (!pr.tracked && reperceptions >= params_.max_reperceptions) continue;
     if (!pr.tracked) ++reperceptions;
     const double tol = pr.tracked ? params_.track_tolerance_px : params_.reperception_tolerance_px;
-    const int r = static_cast<int>(
-        std::ceil(std::min(tol + 3.0 * pr.sigma_px, params_.reperception_max_radius_px)));
+    const int r = searchRadius(pr, tol);
     const int x0 = std::max(h + 1, static_cast<int>(std::lround(pr.u)) - r);
     const int x1 = std::min(calib_.width - h - 2, static_cast<int>(std::lround(pr.u)) + r);
     const int y0 = std::max(h + 1, static_cast<int>(std::lround(pr.v)) - r);
@@ -234,20 +238,15 @@ bool SlamSystem::makeRoom(SlamFrameResult& out) {
 
 void SlamSystem::addAnchor(ImageView<const std::uint8_t> left, const TrackPoint& p,
                            PointTrack& track) {
-  Anchor a;
   const int x = static_cast<int>(std::lround(p.u_px)), y = static_cast<int>(std::lround(p.v_px));
   // At the pixel its disparity was measured at, as for every landmark (below).
-  a.point = reprojectPixel(calib_, static_cast<float>(x), static_cast<float>(y), p.d_px,
-                           p.sigma_d_px, params_.init_sigma_uv_px);
   const int big = 2 * params_.patch_half_px, side = 2 * big + 1;
   const std::size_t o = anchor_patches_.size();
   anchor_patches_.resize(o + static_cast<std::size_t>(side * side));
-  for (int dy = -big; dy <= big; ++dy)
-    for (int dx = -big; dx <= big; ++dx)
-      anchor_patches_[o + static_cast<std::size_t>((dy + big) * side + dx + big)] =
-          left(std::clamp(x + dx, 0, left.width - 1), std::clamp(y + dy, 0, left.height - 1));
-  track.anchor = static_cast<int>(anchors_.size());
-  anchors_.push_back(a);
+  LandmarkManager::copyPatch(left, x, y, big, anchor_patches_.data() + o);
+  track.anchor = static_cast<int>(anchor_points_.size());
+  anchor_points_.push_back(reprojectPixel(calib_, static_cast<float>(x), static_cast<float>(y),
+                                          p.d_px, p.sigma_d_px, params_.init_sigma_uv_px));
 }
 
 void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameResult& out) {
@@ -281,15 +280,15 @@ void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameRe
     if (!makeRoom(out)) continue;  // stays a candidate
     if (t.anchor >= 0) {
       // A first-frame candidate: initialised from that frame, whose pose is exact.
-      const Anchor& a = anchors_[static_cast<std::size_t>(t.anchor)];
-      auto id = ekf_.addLandmarkFromExactPose(anchor_pose_, a.point.p_cam, a.point.cov);
+      const StereoPoint& a = anchor_points_[static_cast<std::size_t>(t.anchor)];
+      auto id = ekf_.addLandmarkFromExactPose(anchor_pose_, a.p_cam, a.cov);
       t.candidate = false;
       if (!id) continue;
       const int big = 2 * h, side = 2 * big + 1;
       const ImageView<const std::uint8_t> patch(
           anchor_patches_.data() + static_cast<std::size_t>(t.anchor * side * side), side, side,
           side);
-      landmarks_.add(*id, frame_, patch, big, big, anchor_pose_, a.point.p_cam);
+      landmarks_.add(*id, frame_, patch, big, big, anchor_pose_, a.p_cam);
       landmarks_.info(*id).anchored = true;
       anchored_ids_.push_back(*id);
       landmark_uv_.emplace_back(p.u_px, p.v_px);

@@ -33,9 +33,7 @@ void SlamSystem::restoreAnchors(ImageView<const std::uint8_t> left, SlamFrameRes
   for (const SearchPrediction& pr : preds) {
     if (searched >= params_.max_reperceptions) break;
     ++searched;
-    const int r =
-        static_cast<int>(std::ceil(std::min(params_.reperception_tolerance_px + 3.0 * pr.sigma_px,
-                                            params_.reperception_max_radius_px)));
+    const int r = searchRadius(pr, params_.reperception_tolerance_px);
     PatchStats ps;
     if (!warpTemplate(pr, T_wc.linear(), ps)) continue;
     if (bestStereoPoint(left, templateView(), ps, pr, r) < 0) continue;

@@ -68,7 +68,7 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
   const std::size_t n_anchor =
       static_cast<std::size_t>(params.grid_cols * params.grid_rows * params.max_per_cell);
   const std::size_t big_side = static_cast<std::size_t>(4 * params.patch_half_px + 1);
-  anchors_.reserve(n_anchor);
+  anchor_points_.reserve(n_anchor);
   anchored_ids_.reserve(n_anchor);
   retired_preds_.reserve(n_anchor);
   anchor_patches_.reserve(n_anchor * big_side * big_side);
@@ -140,7 +140,7 @@ Status SlamSystem::afterFrontEnd(ImageView<const std::uint8_t> left,
   if (frame_ == 0) {
     if (Status s = ekf_.reset(Eigen::Isometry3d::Identity(), Matrix6d::Zero()); !s) return s;
     anchor_pose_ = ekf_.pose();
-    anchors_.clear();
+    anchor_points_.clear();
     anchor_patches_.clear();
     anchored_ids_.clear();
   } else {

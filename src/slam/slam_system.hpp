@@ -172,6 +172,8 @@ class SlamSystem {
   bool predictLandmark(const Eigen::Vector3d& m, const Eigen::Matrix3d& C,
                        const Eigen::Isometry3d& T_wc, const Matrix6d& P_pose,
                        SearchPrediction& pr) const;
+  // Search radius around pr's pixel: tolerance + 3 sigma, at most reperception_max_radius_px.
+  int searchRadius(const SearchPrediction& pr, double tolerance_px) const;
   // Warps the patch of landmark pr.id to its predicted view (LandmarkManager::templateFor) into
   // tmpl_, with its statistics; false when the warp fails or the template is flat.
   bool warpTemplate(const SearchPrediction& pr, const Eigen::Matrix3d& R_world_cam, PatchStats& ps);
@@ -203,12 +205,9 @@ class SlamSystem {
   std::vector<int> fresh_;                       // points matched for the first time, this frame
   std::vector<std::uint8_t> tmpl_;               // warped landmark template
   std::vector<int> cell_count_;
-  // A first-frame candidate (step 4): its stereo point of that frame (its appearance patch is
-  // in anchor_patches_).
-  struct Anchor {
-    StereoPoint point;  // first left camera frame = world frame, m
-  };
-  std::vector<Anchor> anchors_;
+  // First-frame candidates (step 4), indexed by PointTrack::anchor: the stereo point of that
+  // frame (first left camera frame = world frame, m) and its appearance patch.
+  std::vector<StereoPoint> anchor_points_;
   std::vector<std::uint8_t> anchor_patches_;  // (4 patch_half_px + 1)^2 bytes per anchor
   Eigen::Isometry3d anchor_pose_ = Eigen::Isometry3d::Identity();  // T_world_cam, first frame
   std::vector<int> anchored_ids_;  // ids of the landmarks initialised from anchors
