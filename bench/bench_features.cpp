@@ -8,21 +8,21 @@
 #include <string>
 #include <vector>
 
-#include "drivers/stereo_source.hpp"
+#include "drivers/source/stereo_source.hpp"
 #include "features/corner_detector.hpp"
 #include "features/stereo_point_matcher.hpp"
 
 namespace {
 
 struct Pair {
-  svslam::io::StereoFrame frame;
+  svslam::drivers::StereoFrame frame;
   std::vector<Eigen::Vector2f> corners;  // detected with default parameters
   std::string error;
 };
 
 Pair loadPair(const std::string& spec) {
   Pair p;
-  auto src = svslam::io::openStereoSource(spec);
+  auto src = svslam::drivers::openStereoSource(spec);
   if (!src) {
     p.error = src.status().message();
     return p;

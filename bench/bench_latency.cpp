@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "drivers/preloaded_source.hpp"
-#include "drivers/stereo_source.hpp"
+#include "drivers/source/preloaded_source.hpp"
+#include "drivers/source/stereo_source.hpp"
 #include "pipeline/config/run_config.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
 #include "pipeline/realtime/stage_work.hpp"
@@ -32,13 +32,13 @@ struct Outcome {
   rt::PipelineReport report;
 };
 
-std::unique_ptr<io::PreloadedSource> load(const std::string& spec, int frames) {
-  auto src = io::openStereoSource(spec);
+std::unique_ptr<drivers::PreloadedSource> load(const std::string& spec, int frames) {
+  auto src = drivers::openStereoSource(spec);
   if (!src) {
     std::fprintf(stderr, "bench_latency: %s\n", src.status().message().c_str());
     return nullptr;
   }
-  auto pre = io::preload(std::move(*src), frames);
+  auto pre = drivers::preload(std::move(*src), frames);
   if (!pre) {
     std::fprintf(stderr, "bench_latency: %s\n", pre.status().message().c_str());
     return nullptr;
@@ -46,11 +46,11 @@ std::unique_ptr<io::PreloadedSource> load(const std::string& spec, int frames) {
   return std::move(*pre);
 }
 
-Outcome runOnce(io::PreloadedSource* frames_in_memory, double rate_hz, bool sequential,
+Outcome runOnce(drivers::PreloadedSource* frames_in_memory, double rate_hz, bool sequential,
                 int threads) {
   Outcome o;
   if (!frames_in_memory) return o;
-  io::PreloadedSource& source = *frames_in_memory;
+  drivers::PreloadedSource& source = *frames_in_memory;
   source.rewind();
   config::RunConfig cfg;
   cfg.threads = threads;

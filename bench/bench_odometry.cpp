@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "drivers/opencv_view.hpp"
-#include "drivers/stereo_source.hpp"
+#include "drivers/files/opencv_view.hpp"
+#include "drivers/source/stereo_source.hpp"
 #include "odometry/stereo_odometry.hpp"
 
 namespace {
@@ -25,21 +25,21 @@ constexpr int kFrames = 20;
 
 struct Sequence {
   svslam::StereoCalibration calib;
-  std::vector<svslam::io::StereoFrame> frames;
+  std::vector<svslam::drivers::StereoFrame> frames;
   std::string error;
 };
 
 const Sequence& sequence() {
   static Sequence s = [] {
     Sequence q;
-    auto src = svslam::io::openStereoSource("kitti:" + kKitti);
+    auto src = svslam::drivers::openStereoSource("kitti:" + kKitti);
     if (!src) {
       q.error = src.status().message();
       return q;
     }
     q.calib = (*src)->calibration();
     for (int i = 0; i < kFrames; ++i) {
-      svslam::io::StereoFrame f;
+      svslam::drivers::StereoFrame f;
       auto more = (*src)->next(f);
       if (!more || !*more) break;
       q.frames.push_back(std::move(f));
@@ -91,8 +91,8 @@ void BM_FrontEnd_opencv_orb(benchmark::State& st) {
     for (const auto& f : seq.frames) {
       std::vector<cv::KeyPoint> kl, kr;
       cv::Mat dl, dr;
-      orb->detectAndCompute(svslam::io::asMat(f.left), cv::noArray(), kl, dl);
-      orb->detectAndCompute(svslam::io::asMat(f.right), cv::noArray(), kr, dr);
+      orb->detectAndCompute(svslam::drivers::asMat(f.left), cv::noArray(), kl, dl);
+      orb->detectAndCompute(svslam::drivers::asMat(f.right), cv::noArray(), kr, dr);
       std::vector<cv::DMatch> sm;
       if (!dl.empty() && !dr.empty()) bf.match(dl, dr, sm);
       // Stereo: same row (2 px), positive disparity -> 3D point.

@@ -9,9 +9,9 @@
 #include <opencv2/core.hpp>
 #include <string>
 
-#include "drivers/opencv_view.hpp"
+#include "drivers/files/opencv_view.hpp"
 #include "eval/disparity_metrics.hpp"
-#include "pipeline/cli/stereo_case.hpp"
+#include "pipeline/tools/stereo_case.hpp"
 
 namespace {
 
@@ -51,7 +51,7 @@ int main() {
   cv::setNumThreads(1);
   svslam::SerialExecutor ex;
   for (const char* c : cases) {
-    auto info = svslam::io::findStereoGtCase(data + "/" + c, "nonocc", "");
+    auto info = svslam::drivers::findStereoGtCase(data + "/" + c, "nonocc", "");
     if (!info) continue;
     auto loaded = svslam::cli::loadCase(*info, true, true);
     if (!loaded) continue;
@@ -69,13 +69,13 @@ int main() {
     bm->setTextureThreshold(10);
     bm->setUniquenessRatio(10);
     bm->setDisp12MaxDiff(1);
-    bm->compute(svslam::io::asMat(loaded->left), svslam::io::asMat(loaded->right), d);
+    bm->compute(svslam::drivers::asMat(loaded->left), svslam::drivers::asMat(loaded->right), d);
     print("StereoBM", info->name,
           svslam::evaluateDisparity(fromOpenCv(d, 0).cview(), loaded->gt.cview(),
                                     loaded->mask.cview()));
     auto sgbm = cv::StereoSGBM::create(0, nd, 5, 8 * 25, 32 * 25, 1, 63, 10, 100, 2,
                                        cv::StereoSGBM::MODE_SGBM_3WAY);
-    sgbm->compute(svslam::io::asMat(loaded->left), svslam::io::asMat(loaded->right), d);
+    sgbm->compute(svslam::drivers::asMat(loaded->left), svslam::drivers::asMat(loaded->right), d);
     print("SGBM-3way", info->name,
           svslam::evaluateDisparity(fromOpenCv(d, 0).cview(), loaded->gt.cview(),
                                     loaded->mask.cview()));

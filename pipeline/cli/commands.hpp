@@ -10,7 +10,7 @@ int runDisparity(const std::vector<std::string>& args);
 int runEvalDisparity(const std::vector<std::string>& args);
 int runFitSigma(const std::vector<std::string>& args);
 int runEvalTrajectory(const std::vector<std::string>& args);
-int runRun(const std::vector<std::string>& args);
+int runPipeline(const std::vector<std::string>& args);
 int runListen(const std::vector<std::string>& args);  // cli/listen_command.cpp (LCM)
 
 }  // namespace svslam::cli

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "drivers/lcm_transport.hpp"
+#include "drivers/lcm/lcm_transport.hpp"
 #include "pipeline/cli/arg_parser.hpp"
 #include "pipeline/cli/commands.hpp"
 #include "pipeline/cli/json_writer.hpp"
@@ -29,16 +29,16 @@ std::string jsonArray(const double* v, int n, const char* fmt) {
   return s + "]";
 }
 
-const char* statusName(io::TrackingStatus s) {
+const char* statusName(drivers::TrackingStatus s) {
   switch (s) {
-    case io::TrackingStatus::kTracking: return "tracking";
-    case io::TrackingStatus::kLost: return "lost";
-    case io::TrackingStatus::kInitializing: return "initializing";
+    case drivers::TrackingStatus::kTracking: return "tracking";
+    case drivers::TrackingStatus::kLost: return "lost";
+    case drivers::TrackingStatus::kInitializing: return "initializing";
   }
   return "unknown";
 }
 
-std::string poseLine(const svslam_lcm::pose_t& m, const io::PoseReport& r) {
+std::string poseLine(const svslam_lcm::pose_t& m, const drivers::PoseReport& r) {
   double diag[6];
   for (int i = 0; i < 6; ++i) diag[i] = r.cov(i, i);
   JsonObject j;
@@ -54,7 +54,7 @@ std::string poseLine(const svslam_lcm::pose_t& m, const io::PoseReport& r) {
   return j.str();
 }
 
-std::string statsLine(const io::StatsReport& r) {
+std::string statsLine(const drivers::StatsReport& r) {
   std::string stages = "[";
   for (std::size_t i = 0; i < r.stages.size(); ++i) {
     JsonObject s;
@@ -75,7 +75,7 @@ std::string statsLine(const io::StatsReport& r) {
   }
   JsonObject j;
   j.add("type", "stats")
-      .add("utime", io::toUtime(r.t_ns))
+      .add("utime", drivers::toUtime(r.t_ns))
       .add("frames_in", r.frames_in)
       .add("frames_out", r.frames_out)
       .add("frames_dropped", r.frames_dropped)
@@ -91,7 +91,7 @@ std::string statsLine(const io::StatsReport& r) {
 }  // namespace
 
 int runListen(const std::vector<std::string>& args) {
-  const io::LcmParams defaults;
+  const drivers::LcmParams defaults;
   ArgParser p("listen",
               "Subscribes to the poses (and statistics) svslam publishes on LCM and prints one\n"
               "JSON line per message on stdout: poses with seq, utime, publish_utime (us),\n"
@@ -114,11 +114,11 @@ int runListen(const std::vector<std::string>& args) {
   if (!(*timeout_s > 0.0 && *timeout_s <= 86400.0))
     return fail(Status::invalidArgument("--timeout-s must be in (0, 86400]"));
 
-  io::LcmParams lp;
+  drivers::LcmParams lp;
   lp.url = p.get("url");
   lp.pose_channel = p.get("channel");
   lp.stats_channel = p.get("stats-channel");
-  auto link = io::LcmLink::open(lp);
+  auto link = drivers::LcmLink::open(lp);
   if (!link) return fail(link.status());
 
   using Clock = std::chrono::steady_clock;
@@ -130,8 +130,8 @@ int runListen(const std::vector<std::string>& args) {
   auto on_pose = [&](const std::uint8_t* d, std::size_t n) {
     if (wanted > 0 && received >= wanted) return;
     svslam_lcm::pose_t m;
-    Status s = io::decodeLcm(d, n, m);
-    Result<io::PoseReport> r = s ? io::fromLcm(m) : Result<io::PoseReport>(s);
+    Status s = drivers::decodeLcm(d, n, m);
+    Result<drivers::PoseReport> r = s ? drivers::fromLcm(m) : Result<drivers::PoseReport>(s);
     if (!r) {
       ++malformed;
       std::fprintf(stderr, "svslam listen: skipped a malformed pose: %s\n",
@@ -145,8 +145,8 @@ int runListen(const std::vector<std::string>& args) {
   };
   auto on_stats = [&](const std::uint8_t* d, std::size_t n) {
     svslam_lcm::stats_t m;
-    Status s = io::decodeLcm(d, n, m);
-    Result<io::StatsReport> r = s ? io::fromLcm(m) : Result<io::StatsReport>(s);
+    Status s = drivers::decodeLcm(d, n, m);
+    Result<drivers::StatsReport> r = s ? drivers::fromLcm(m) : Result<drivers::StatsReport>(s);
     if (!r) return;
     std::printf("%s\n", statsLine(*r).c_str());
     std::fflush(stdout);
@@ -156,7 +156,7 @@ int runListen(const std::vector<std::string>& args) {
     if (auto id = (*link)->subscribeRaw(lp.stats_channel, on_stats); !id)
       return fail(id.status());
   }
-  std::vector<io::Command> ignored;
+  std::vector<drivers::Command> ignored;
   while (wanted == 0 || received < wanted) {
     const auto left = deadline - Clock::now();
     if (left <= Clock::duration::zero()) {

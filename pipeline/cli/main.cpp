@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
     if (cmd == "disparity") return svslam::cli::runDisparity(args);
     if (cmd == "eval-disparity") return svslam::cli::runEvalDisparity(args);
     if (cmd == "fit-sigma") return svslam::cli::runFitSigma(args);
-    if (cmd == "run") return svslam::cli::runRun(args);
+    if (cmd == "run") return svslam::cli::runPipeline(args);
     if (cmd == "eval-trajectory") return svslam::cli::runEvalTrajectory(args);
 #ifdef SVSLAM_HAVE_LISTEN
     if (cmd == "listen") return svslam::cli::runListen(args);

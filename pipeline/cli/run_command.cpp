@@ -11,9 +11,9 @@
 #include <system_error>
 #include <vector>
 
-#include "drivers/lcm_transport.hpp"
-#include "drivers/preloaded_source.hpp"
-#include "drivers/stereo_source.hpp"
+#include "drivers/lcm/lcm_transport.hpp"
+#include "drivers/source/preloaded_source.hpp"
+#include "drivers/source/stereo_source.hpp"
 #include "pipeline/cli/arg_parser.hpp"
 #include "pipeline/cli/commands.hpp"
 #include "pipeline/cli/json_writer.hpp"
@@ -68,35 +68,35 @@ Status applyOverrides(const ArgParser& p, config::RunConfig& cfg) {
 }
 
 // Applies the LCM commands received since the last tick and answers each on the status channel.
-void handleCommands(io::LcmLink& lcm, rt::RunWork& work, rt::PipelineControl& control) {
-  std::vector<io::Command> cmds;
+void handleCommands(drivers::LcmLink& lcm, rt::RunWork& work, rt::PipelineControl& control) {
+  std::vector<drivers::Command> cmds;
   if (!lcm.pollCommands(0, cmds)) return;
-  for (const io::Command& c : cmds) {
-    io::CommandStatus st;
+  for (const drivers::Command& c : cmds) {
+    drivers::CommandStatus st;
     st.t_ns = c.t_ns;
     st.seq = c.seq;
     st.ok = true;
     switch (c.kind) {
-      case io::CommandKind::kReset:
+      case drivers::CommandKind::kReset:
         st.command = "reset";
         work.requestReset();
         st.message = "the estimator restarts at the next frame (new map, pose at identity)";
         break;
-      case io::CommandKind::kSaveMap:
+      case drivers::CommandKind::kSaveMap:
         st.command = "save_map";
         work.requestSaveMap(c.argument, c.seq);
         continue;  // answered by the estimator once written
-      case io::CommandKind::kPause:
+      case drivers::CommandKind::kPause:
         st.command = "pause";
         control.pause = true;
         st.message = "capture paused";
         break;
-      case io::CommandKind::kResume:
+      case drivers::CommandKind::kResume:
         st.command = "resume";
         control.pause = false;
         st.message = "capture resumed";
         break;
-      case io::CommandKind::kShutdown:
+      case drivers::CommandKind::kShutdown:
         st.command = "shutdown";
         service::requestStop();
         st.message = "stopping: draining the pipeline";
@@ -109,7 +109,7 @@ void handleCommands(io::LcmLink& lcm, rt::RunWork& work, rt::PipelineControl& co
 
 }  // namespace
 
-int runRun(const std::vector<std::string>& args) {
+int runPipeline(const std::vector<std::string>& args) {
   ArgParser p("run",
               "Runs the real-time pipeline (capture -> stereo -> estimator -> publisher, one\n"
               "thread each) over a source and writes to the output folder: trajectory_kitti.txt\n"
@@ -161,13 +161,13 @@ int runRun(const std::vector<std::string>& args) {
               " does not exist (this machine has CPUs 0.." + std::to_string(ncpu - 1) + ")"));
   }
   const std::string source_spec = p.has("source") ? p.get("source") : cfg.source;
-  auto opened = io::openStereoSource(source_spec);
+  auto opened = drivers::openStereoSource(source_spec);
   if (!opened) return fail(opened.status());
-  std::unique_ptr<io::StereoSource> source = std::move(*opened);
+  std::unique_ptr<drivers::StereoSource> source = std::move(*opened);
   const bool live = source->size() < 0;
   if (cfg.pipeline.preload && !live) {
     logLine("reading the sequence into memory");
-    auto pre = io::preloadSource(std::move(source), cfg.max_frames);
+    auto pre = drivers::preloadSource(std::move(source), cfg.max_frames);
     if (!pre) return fail(pre.status());
     source = std::move(*pre);
   }
@@ -178,9 +178,9 @@ int runRun(const std::vector<std::string>& args) {
   if (ec || !std::filesystem::is_directory(out_dir))
     return fail(Status::ioError("cannot create output folder '" + out_dir + "'"));
 
-  std::unique_ptr<io::LcmLink> lcm;
+  std::unique_ptr<drivers::LcmLink> lcm;
   if (cfg.lcm.enabled) {
-    auto l = io::LcmLink::open(cfg.lcm.params);
+    auto l = drivers::LcmLink::open(cfg.lcm.params);
     if (!l) return fail(l.status());
     lcm = std::move(*l);
   }

@@ -4,7 +4,7 @@
 #include <string>
 
 #include "core/status.hpp"
-#include "drivers/lcm_transport.hpp"
+#include "drivers/lcm/lcm_transport.hpp"
 #include "pipeline/service/scheduling.hpp"
 
 namespace svslam::config {
@@ -29,7 +29,7 @@ struct PipelineConfig {
 
 struct LcmConfig {
   bool enabled = false;       // publish poses / stats / map and listen for commands
-  io::LcmParams params;       // url and channel names
+  drivers::LcmParams params;       // url and channel names
   double stats_period_s = 1.0;  // stats and map summary every this many s
 };
 

@@ -14,7 +14,7 @@
 namespace svslam::config {
 
 struct RunConfig {
-  std::string source = "synthetic";  // source specification (drivers/stereo_source.hpp)
+  std::string source = "synthetic";  // source specification (drivers/source/stereo_source.hpp)
   int max_frames = 0;                // 0 = the whole sequence
   int threads = 1;                   // worker threads of the stages that split work
   std::uint64_t seed = 1;            // seeds every random choice (RANSAC)

@@ -7,7 +7,7 @@
 #include <cstdint>
 
 #include "core/status.hpp"
-#include "drivers/stereo_source.hpp"
+#include "drivers/source/stereo_source.hpp"
 #include "odometry/stereo_stage.hpp"
 #include "slam/slam_system.hpp"
 
@@ -23,7 +23,7 @@ struct FrameStamps {
 };
 
 struct FrameSlot {
-  io::StereoFrame frame;   // index, t_ns (the source's timestamp), rectified grey pair
+  drivers::StereoFrame frame;   // index, t_ns (the source's timestamp), rectified grey pair
   std::int64_t seq = 0;    // capture sequence number (a gap downstream = a dropped frame)
   bool has_ground_truth = false;
   Eigen::Isometry3d T_gt_first_cam = Eigen::Isometry3d::Identity();

@@ -24,8 +24,8 @@ class RunWork::Clock final : public StageObserver {
   std::int64_t last_ = 0;
 };
 
-RunWork::RunWork(const config::RunConfig& cfg, io::StereoSource& source,
-                 const std::string& out_dir, io::LcmLink* lcm)
+RunWork::RunWork(const config::RunConfig& cfg, drivers::StereoSource& source,
+                 const std::string& out_dir, drivers::LcmLink* lcm)
     : cfg_(cfg), source_(source), out_dir_(out_dir), lcm_(lcm), ekf_mode_(cfg.mode == "ekf") {}
 
 RunWork::~RunWork() = default;
@@ -150,7 +150,7 @@ Status RunWork::estimate(FrameSlot& slot) {
     const std::string path = save_path.empty() ? out_dir_ + "/landmarks.ply" : save_path;
     const Status ws = writeMap(path);
     if (lcm_) {
-      io::CommandStatus cs;
+      drivers::CommandStatus cs;
       cs.t_ns = slot.frame.t_ns;
       cs.seq = save_seq;
       cs.command = "save_map";
@@ -201,15 +201,15 @@ Status RunWork::publish(FrameSlot& slot) {
   stereo_ms_.add(slot.stamps.stereo_end_ns - slot.stamps.stereo_start_ns);
   estimate_ms_.add(slot.stamps.estimate_end_ns - slot.stamps.estimate_start_ns);
   if (lcm_) {
-    io::PoseReport p;
+    drivers::PoseReport p;
     p.t_ns = slot.frame.t_ns;
     p.publish_t_ns = slot.frame.t_ns + (now - slot.stamps.capture_ns);  // source clock
     p.seq = slot.seq;
     p.T_world_cam = sr.T_world_cam;
     p.cov = ekf_mode_ ? sr.pose_cov : sr.odometry.covariance;
-    p.status = sr.odometry.frame == 0 ? io::TrackingStatus::kInitializing
-               : sr.odometry.tracked  ? io::TrackingStatus::kTracking
-                                      : io::TrackingStatus::kLost;
+    p.status = sr.odometry.frame == 0 ? drivers::TrackingStatus::kInitializing
+               : sr.odometry.tracked  ? drivers::TrackingStatus::kTracking
+                                      : drivers::TrackingStatus::kLost;
     // A pose that cannot be published (non-finite) is an error of this frame, not of the run:
     // it is skipped on LCM (the files keep the line) and counted by the link.
     (void)lcm_->publishPose(p);
@@ -222,7 +222,7 @@ Status RunWork::publish(FrameSlot& slot) {
 }
 
 void RunWork::publishStats(TimeNs t_ns) {
-  io::StatsReport r;
+  drivers::StatsReport r;
   r.t_ns = t_ns;
   r.frames_in = captured_;
   r.frames_out = summary_.frames;
@@ -238,7 +238,7 @@ void RunWork::publishStats(TimeNs t_ns) {
 }
 
 void RunWork::publishMapSummary(TimeNs t_ns) {
-  io::MapSummaryReport m;
+  drivers::MapSummaryReport m;
   m.t_ns = t_ns;
   const std::vector<MapLandmark> map = slam_->map();
   for (const MapLandmark& l : map) {

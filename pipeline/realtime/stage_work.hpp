@@ -12,8 +12,8 @@
 #include <string>
 
 #include "core/executor.hpp"
-#include "drivers/lcm_transport.hpp"
-#include "drivers/stereo_source.hpp"
+#include "drivers/lcm/lcm_transport.hpp"
+#include "drivers/source/stereo_source.hpp"
 #include "odometry/stereo_odometry.hpp"
 #include "pipeline/config/run_config.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
@@ -26,8 +26,8 @@ namespace svslam::rt {
 class RunWork final : public PipelineWork {
  public:
   // `source` and `lcm` (may be null) outlive the work. Outputs go to `out_dir`.
-  RunWork(const config::RunConfig& cfg, io::StereoSource& source, const std::string& out_dir,
-          io::LcmLink* lcm);
+  RunWork(const config::RunConfig& cfg, drivers::StereoSource& source, const std::string& out_dir,
+          drivers::LcmLink* lcm);
   ~RunWork() override;
   // Opens the output files and builds the estimator; error naming what failed.
   Status init();
@@ -62,9 +62,9 @@ class RunWork final : public PipelineWork {
   void publishMapSummary(TimeNs t_ns);
 
   config::RunConfig cfg_;
-  io::StereoSource& source_;
+  drivers::StereoSource& source_;
   std::string out_dir_;
-  io::LcmLink* lcm_;
+  drivers::LcmLink* lcm_;
   bool ekf_mode_;
   std::atomic<std::int64_t> captured_{0};
   int max_frames_ = 0;

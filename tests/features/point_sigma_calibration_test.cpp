@@ -14,7 +14,7 @@
 
 #include "../stereo/real_data.hpp"
 #include "../stereo/sigma_samples.hpp"
-#include "pipeline/cli/point_sigma_samples.hpp"
+#include "pipeline/tools/point_sigma_samples.hpp"
 #include "stereo/sigma_model.hpp"
 
 namespace svslam {
@@ -24,7 +24,7 @@ using Samples = testing::SigmaSamples;
 
 Samples samplesOf(const std::string& sub) {
   Samples s;
-  auto info = io::findStereoGtCase(testing::dataDir() + "/" + sub, "nonocc", "");
+  auto info = drivers::findStereoGtCase(testing::dataDir() + "/" + sub, "nonocc", "");
   EXPECT_TRUE(info.isOk()) << info.status().message();
   if (!info) return s;
   auto c = cli::loadCase(*info, true, true);

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "drivers/stereo_source.hpp"
-#include "drivers/synthetic_flight.hpp"
-#include "drivers/trajectory_io.hpp"
+#include "drivers/source/stereo_source.hpp"
+#include "drivers/synthetic/synthetic_flight.hpp"
+#include "drivers/files/trajectory_io.hpp"
 #include "eval/trajectory_metrics.hpp"
 
 namespace fs = std::filesystem;
@@ -26,20 +26,20 @@ const std::string kKitti = kData + "/kitti_odometry_seq_a";
 const std::string kEuroc = kData + "/euroc_mh01_first320";
 
 struct Track {
-  io::TrajectoryFile traj;  // TUM-style, with stamps
+  drivers::TrajectoryFile traj;  // TUM-style, with stamps
   int tracked = 0;
 };
 
 Track runOdometry(const std::string& spec, const StereoOdometryParams& params, int max_frames) {
   Track t;
-  auto src = io::openStereoSource(spec);
+  auto src = drivers::openStereoSource(spec);
   EXPECT_TRUE(src.isOk()) << src.status().message();
   if (!src) return t;
   StereoOdometry vo(params, (*src)->calibration());
   EXPECT_TRUE(vo.initStatus().isOk()) << vo.initStatus().message();
   SerialExecutor ex;
-  io::StereoFrame f;
-  t.traj.format = io::TrajectoryFormat::kTum;
+  drivers::StereoFrame f;
+  t.traj.format = drivers::TrajectoryFormat::kTum;
   while (max_frames <= 0 || static_cast<int>(t.traj.poses.size()) < max_frames) {
     auto more = (*src)->next(f);
     EXPECT_TRUE(more.isOk()) << more.status().message();
@@ -58,7 +58,7 @@ Track runOdometry(const std::string& spec, const StereoOdometryParams& params, i
 TEST(StereoOdometry, KittiDriftWithinTarget) {
   if (!fs::exists(kKitti + "/poses.txt")) GTEST_SKIP() << "no KITTI data at " << kKitti;
   const Track t = runOdometry("kitti:" + kKitti, StereoOdometryParams{}, 0);
-  auto gt = io::readTrajectory(kKitti + "/poses.txt");
+  auto gt = drivers::readTrajectory(kKitti + "/poses.txt");
   ASSERT_TRUE(gt.isOk());
   ASSERT_EQ(t.traj.poses.size(), gt->poses.size());
   EXPECT_EQ(t.tracked, static_cast<int>(gt->poses.size()));
@@ -77,13 +77,13 @@ TEST(StereoOdometry, EurocAteWithinTarget) {
   const std::string gt_path = kEuroc + "/groundtruth_per_frame_cam0_times.txt";
   if (!fs::exists(gt_path)) GTEST_SKIP() << "no EuRoC data at " << kEuroc;
   const Track t = runOdometry("euroc:" + kEuroc, StereoOdometryParams{}, 0);
-  auto gt = io::readTrajectory(gt_path);
+  auto gt = drivers::readTrajectory(gt_path);
   ASSERT_TRUE(gt.isOk());
-  auto tbs = io::readEurocTbs(kEuroc + "/mav0/cam0/sensor.yaml");
+  auto tbs = drivers::readEurocTbs(kEuroc + "/mav0/cam0/sensor.yaml");
   ASSERT_TRUE(tbs.isOk());
   for (auto& T : gt->poses) T = T * *tbs;  // body -> cam0
   std::vector<Eigen::Isometry3d> g, e;
-  ASSERT_TRUE(io::associateTrajectories(*gt, t.traj, 0.02, g, e).isOk());
+  ASSERT_TRUE(drivers::associateTrajectories(*gt, t.traj, 0.02, g, e).isOk());
   ASSERT_GE(g.size(), 300u);
   TrajectoryEvalParams ep;
   ep.segment_lengths_m = {1, 2, 4};
@@ -114,7 +114,7 @@ TEST(StereoOdometry, DenseModeTracksKitti) {
   p.dense_stereo.max_disp = 128;
   const int n = 20;
   const Track t = runOdometry("kitti:" + kKitti, p, n);
-  auto gt = io::readTrajectory(kKitti + "/poses.txt");
+  auto gt = drivers::readTrajectory(kKitti + "/poses.txt");
   ASSERT_TRUE(gt.isOk());
   gt->poses.resize(n);
   EXPECT_EQ(t.tracked, n);
@@ -159,12 +159,12 @@ TEST(StereoOdometry, BadInput) {
 // previous pixel back-projected with the true depth, moved by the true motion, projected: a
 // match is correct within 1.5 px), and the time of the matching stages (printed, not asserted).
 TEST(StereoOdometry, RoiTrackingKeepsMatchPrecisionOnSyntheticFlight) {
-  auto src = io::openStereoSource("synthetic:width=512,height=384,frames=100");
+  auto src = drivers::openStereoSource("synthetic:width=512,height=384,frames=100");
   ASSERT_TRUE(src.isOk()) << src.status().message();
-  const io::SyntheticFlight* scene = io::asSyntheticFlight(**src);
+  const drivers::SyntheticFlight* scene = drivers::asSyntheticFlight(**src);
   ASSERT_NE(scene, nullptr);
   const StereoCalibration calib = (*src)->calibration();
-  std::vector<io::StereoFrame> frames(20);
+  std::vector<drivers::StereoFrame> frames(20);
   for (auto& f : frames) ASSERT_TRUE((*src)->next(f).isOk());
   std::vector<ImageF32> depth(frames.size());
   for (std::size_t i = 0; i < frames.size(); ++i)
@@ -226,9 +226,9 @@ TEST(StereoOdometry, RoiTrackingKeepsMatchPrecisionOnSyntheticFlight) {
 // points matched, bunched where the motion was small, and the first step was 1.8 cm off along
 // the shift/tilt mode (seed 2; later steps 1-2 mm).
 TEST(StereoOdometry, FirstPairWithoutMotionPriorIsSearchedWidely) {
-  auto src = io::openStereoSource("synthetic:seed=2,frames=100");
+  auto src = drivers::openStereoSource("synthetic:seed=2,frames=100");
   ASSERT_TRUE(src.isOk()) << src.status().message();
-  const io::SyntheticFlight* scene = io::asSyntheticFlight(**src);
+  const drivers::SyntheticFlight* scene = drivers::asSyntheticFlight(**src);
   ASSERT_NE(scene, nullptr);
   StereoOdometry vo(StereoOdometryParams{}, (*src)->calibration());
   ASSERT_TRUE(vo.initStatus().isOk());
@@ -236,7 +236,7 @@ TEST(StereoOdometry, FirstPairWithoutMotionPriorIsSearchedWidely) {
   int matches[3] = {0, 0, 0};
   double err_m[3] = {0, 0, 0};
   for (int i = 0; i < 3; ++i) {
-    io::StereoFrame f;
+    drivers::StereoFrame f;
     ASSERT_TRUE((*src)->next(f).isOk());
     OdometryFrameResult r;
     ASSERT_TRUE(vo.process(f.left.cview(), f.right.cview(), r, ex).isOk());

@@ -3,7 +3,7 @@
 // and ROI tracking (where detection stays in the odometry).
 #include <gtest/gtest.h>
 
-#include "drivers/stereo_source.hpp"
+#include "drivers/source/stereo_source.hpp"
 #include "odometry/stereo_odometry.hpp"
 #include "odometry/stereo_stage.hpp"
 #include "slam/slam_system.hpp"
@@ -34,7 +34,7 @@ std::vector<Variant> variants() {
 
 TEST(StereoStage, SplitEqualsAllInOneForOdometryAndSlam) {
   for (const Variant& var : variants()) {
-    auto src = io::openStereoSource("synthetic:width=384,height=288,frames=6");
+    auto src = drivers::openStereoSource("synthetic:width=384,height=288,frames=6");
     ASSERT_TRUE(src.isOk());
     const StereoCalibration calib = (*src)->calibration();
     StereoOdometry whole(var.params, calib), split(var.params, calib);
@@ -45,7 +45,7 @@ TEST(StereoStage, SplitEqualsAllInOneForOdometryAndSlam) {
     ASSERT_TRUE(stage.initStatus().isOk());
     StereoStageOutput out;
     SerialExecutor ex;
-    io::StereoFrame f;
+    drivers::StereoFrame f;
     int n = 0;
     for (;;) {
       auto more = (*src)->next(f);
@@ -77,7 +77,7 @@ TEST(StereoStage, SplitEqualsAllInOneForOdometryAndSlam) {
 }
 
 TEST(StereoStage, RejectsWrongSizeAndMismatchedOutput) {
-  auto src = io::openStereoSource("synthetic:width=256,height=192,frames=1");
+  auto src = drivers::openStereoSource("synthetic:width=256,height=192,frames=1");
   ASSERT_TRUE(src.isOk());
   const StereoCalibration calib = (*src)->calibration();
   StereoStage stage(StereoOdometryParams{}, calib);
@@ -86,7 +86,7 @@ TEST(StereoStage, RejectsWrongSizeAndMismatchedOutput) {
   SerialExecutor ex;
   EXPECT_FALSE(stage.process(small.cview(), small.cview(), out, ex).isOk());
   // An output made without dense stereo given to a dense odometry: refused, not misused.
-  io::StereoFrame f;
+  drivers::StereoFrame f;
   auto more = (*src)->next(f);
   ASSERT_TRUE(more.isOk() && more.value());
   ASSERT_TRUE(stage.process(f.left.cview(), f.right.cview(), out, ex).isOk());

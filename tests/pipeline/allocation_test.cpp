@@ -17,7 +17,7 @@
 #include <filesystem>
 #include <new>
 
-#include "drivers/stereo_source.hpp"
+#include "drivers/source/stereo_source.hpp"
 #include "pipeline/config/run_config.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
 #include "pipeline/realtime/stage_work.hpp"
@@ -218,7 +218,7 @@ TEST_P(FullWork, AllocatesNothingPerFrame) {
   if (!SVSLAM_COUNT_ALLOCATIONS)
     GTEST_SKIP() << "sanitizer build: the sanitizer's own operator new cannot be counted here";
   constexpr int kFirst = 30, kLast = 50, kFrames = 52;
-  auto src = io::openStereoSource("synthetic:width=320,height=240,frames=52");
+  auto src = drivers::openStereoSource("synthetic:width=320,height=240,frames=52");
   ASSERT_TRUE(src.isOk()) << src.status().message();
   config::RunConfig cfg;
   cfg.threads = GetParam();

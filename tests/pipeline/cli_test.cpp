@@ -13,9 +13,9 @@
 #include <sstream>
 #include <string>
 
-#include "drivers/image_io.hpp"
-#include "drivers/opencv_view.hpp"
-#include "drivers/synthetic_pair.hpp"
+#include "drivers/files/image_io.hpp"
+#include "drivers/files/opencv_view.hpp"
+#include "drivers/synthetic/synthetic_pair.hpp"
 
 namespace fs = std::filesystem;
 
@@ -33,21 +33,21 @@ class Cli : public ::testing::Test {
            ("svslam_cli_" + std::to_string(::getpid()) + "_" +
             ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
-    svslam::io::SyntheticPairParams p;
+    svslam::drivers::SyntheticPairParams p;
     p.width = 160;
     p.height = 120;
     p.d_near_px = 20;
-    auto pair = svslam::io::makeSyntheticPair(p);
+    auto pair = svslam::drivers::makeSyntheticPair(p);
     ASSERT_TRUE(pair.isOk());
     writeGrey(path("l.png"), pair->left);
     writeGrey(path("r.png"), pair->right);
-    ASSERT_TRUE(svslam::io::writePfm(path("gt.pfm"), pair->gt_disparity_px.cview()).isOk());
+    ASSERT_TRUE(svslam::drivers::writePfm(path("gt.pfm"), pair->gt_disparity_px.cview()).isOk());
   }
   void TearDown() override { fs::remove_all(dir_); }
 
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
   static void writeGrey(const std::string& p, const svslam::ImageU8& img) {
-    const cv::Mat m = svslam::io::asMat(img);
+    const cv::Mat m = svslam::drivers::asMat(img);
     ASSERT_TRUE(cv::imwrite(p, m));
   }
   CliRun run(const std::string& args) const {
@@ -84,7 +84,7 @@ TEST_F(Cli, DisparityWritesOutputsAndJson) {
   for (const char* key : {"\"width\": 160", "\"height\": 120", "\"method\": \"census\"",
                           "\"threads\": 1", "\"median_ms\"", "\"valid_fraction\""})
     EXPECT_NE(r.out.find(key), std::string::npos) << key << " in " << r.out;
-  auto d = svslam::io::readPfm(path("d.pfm"));
+  auto d = svslam::drivers::readPfm(path("d.pfm"));
   ASSERT_TRUE(d.isOk());
   int inf = 0;
   for (int y = 0; y < d->height(); ++y)

@@ -16,14 +16,14 @@
 #include <sstream>
 #include <thread>
 
-#include "drivers/lcm_messages.hpp"
-#include "drivers/lcm_transport.hpp"
+#include "drivers/lcm/lcm_messages.hpp"
+#include "drivers/lcm/lcm_transport.hpp"
 #include "svslam_lcm/command_status_t.hpp"
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-namespace svslam::io {
+namespace svslam::drivers {
 namespace {
 
 const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
@@ -197,4 +197,4 @@ TEST(LcmPipeline, InnerCommandsAreAppliedAndAnswered) {
 TEST(LcmPipeline, CommandsAreAppliedAndAnswered) { runInNamespace("CommandsAreAppliedAndAnswered"); }
 
 }  // namespace
-}  // namespace svslam::io
+}  // namespace svslam::drivers

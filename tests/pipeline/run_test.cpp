@@ -12,7 +12,7 @@
 #include <sstream>
 #include <string>
 
-#include "drivers/trajectory_io.hpp"
+#include "drivers/files/trajectory_io.hpp"
 
 namespace fs = std::filesystem;
 
@@ -75,7 +75,7 @@ TEST_F(Run, KittiOutputsAreCompleteAndDeterministic) {
                           "\"p50_ms\"", "\"p99_ms\"", "\"max_ms\"", "\"front_end\""})
     EXPECT_NE(stats.find(key), std::string::npos) << key << " missing in " << stats;
   // The first pose is the identity (KITTI convention).
-  auto t = svslam::io::readTrajectory(path("a/trajectory_kitti.txt"));
+  auto t = svslam::drivers::readTrajectory(path("a/trajectory_kitti.txt"));
   ASSERT_TRUE(t.isOk());
   EXPECT_TRUE(t->poses.front().isApprox(Eigen::Isometry3d::Identity()));
 }

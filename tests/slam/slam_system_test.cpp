@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "drivers/stereo_source.hpp"
-#include "drivers/trajectory_io.hpp"
+#include "drivers/source/stereo_source.hpp"
+#include "drivers/files/trajectory_io.hpp"
 #include "eval/trajectory_metrics.hpp"
 
 namespace fs = std::filesystem;
@@ -31,13 +31,13 @@ struct RunOut {
 
 RunOut runSlam(const std::string& spec, const SlamSystemParams& sp, int max_frames = 0) {
   RunOut r;
-  auto src = io::openStereoSource(spec);
+  auto src = drivers::openStereoSource(spec);
   EXPECT_TRUE(src.isOk()) << src.status().message();
   if (!src) return r;
   SlamSystem slam(sp, StereoOdometryParams{}, (*src)->calibration());
   EXPECT_TRUE(slam.initStatus().isOk()) << slam.initStatus().message();
   SerialExecutor ex;
-  io::StereoFrame f;
+  drivers::StereoFrame f;
   while (max_frames <= 0 || static_cast<int>(r.est.size()) < max_frames) {
     auto more = (*src)->next(f);
     EXPECT_TRUE(more.isOk()) << more.status().message();
@@ -62,12 +62,12 @@ RunOut runSlam(const std::string& spec, const SlamSystemParams& sp, int max_fram
 // Pure visual odometry on the same source (the `--mode vo` baseline).
 std::vector<Eigen::Isometry3d> runVo(const std::string& spec) {
   std::vector<Eigen::Isometry3d> out;
-  auto src = io::openStereoSource(spec);
+  auto src = drivers::openStereoSource(spec);
   EXPECT_TRUE(src.isOk());
   if (!src) return out;
   StereoOdometry vo(StereoOdometryParams{}, (*src)->calibration());
   SerialExecutor ex;
-  io::StereoFrame f;
+  drivers::StereoFrame f;
   while (true) {
     auto more = (*src)->next(f);
     if (!more || !*more) break;
@@ -175,7 +175,7 @@ TEST(SlamSystem, KittiNoWorseThanOdometry) {
   const std::string dir = std::string(SVSLAM_DATA_DIR) + "/kitti_odometry_seq_a";
   if (!fs::exists(dir + "/poses.txt")) GTEST_SKIP() << "no KITTI data at " << dir;
   const RunOut r = runSlam("kitti:" + dir, SlamSystemParams{});
-  auto gt = io::readTrajectory(dir + "/poses.txt");
+  auto gt = drivers::readTrajectory(dir + "/poses.txt");
   ASSERT_TRUE(gt.isOk());
   TrajectoryEvalParams ep;
   ep.segment_lengths_m = {10, 20, 40};
@@ -193,18 +193,18 @@ TEST(SlamSystem, EurocNoWorseThanOdometry) {
   const std::string gt_path = dir + "/groundtruth_per_frame_cam0_times.txt";
   if (!fs::exists(gt_path)) GTEST_SKIP() << "no EuRoC data at " << dir;
   const RunOut r = runSlam("euroc:" + dir, SlamSystemParams{});
-  auto gt = io::readTrajectory(gt_path);
-  auto tbs = io::readEurocTbs(dir + "/mav0/cam0/sensor.yaml");
+  auto gt = drivers::readTrajectory(gt_path);
+  auto tbs = drivers::readEurocTbs(dir + "/mav0/cam0/sensor.yaml");
   ASSERT_TRUE(gt.isOk() && tbs.isOk());
   for (auto& T : gt->poses) T = T * *tbs;
-  io::TrajectoryFile es, vo;
-  es.format = vo.format = io::TrajectoryFormat::kTum;
+  drivers::TrajectoryFile es, vo;
+  es.format = vo.format = drivers::TrajectoryFormat::kTum;
   es.t_ns = vo.t_ns = r.t_ns;
   es.poses = r.est;
   vo.poses = r.vo;
   std::vector<Eigen::Isometry3d> g1, e1, g2, e2;
-  ASSERT_TRUE(io::associateTrajectories(*gt, es, 0.02, g1, e1).isOk());
-  ASSERT_TRUE(io::associateTrajectories(*gt, vo, 0.02, g2, e2).isOk());
+  ASSERT_TRUE(drivers::associateTrajectories(*gt, es, 0.02, g1, e1).isOk());
+  ASSERT_TRUE(drivers::associateTrajectories(*gt, vo, 0.02, g2, e2).isOk());
   TrajectoryEvalParams ep;
   ep.segment_lengths_m = {1, 2, 4};
   ep.step_frames = 1;

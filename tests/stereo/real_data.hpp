@@ -6,7 +6,7 @@
 #include <string>
 
 #include "eval/disparity_metrics.hpp"
-#include "pipeline/cli/stereo_case.hpp"
+#include "pipeline/tools/stereo_case.hpp"
 
 namespace svslam::testing {
 
@@ -27,7 +27,7 @@ struct CaseRun {
 // and scores it. Fails the test on any error.
 inline CaseRun runCase(const std::string& sub, DenseStereoParams params) {
   CaseRun run;
-  auto info = io::findStereoGtCase(dataDir() + "/" + sub, "nonocc", "");
+  auto info = drivers::findStereoGtCase(dataDir() + "/" + sub, "nonocc", "");
   EXPECT_TRUE(info.isOk()) << info.status().message();
   if (!info) return run;
   auto loaded = cli::loadCase(*info, true, true);

@@ -1,0 +1,280 @@
+// v4l2: stereo source, camera spec parsing, calibration + rectification, timestamp pairing
+// (see v4l2_source.hpp).
+#include "drivers/camera/v4l2_source.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "drivers/files/opencv_view.hpp"
+#include "drivers/camera/pixel_formats.hpp"
+
+namespace svslam::drivers {
+namespace {
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t p = s.find(sep, start);
+    out.push_back(s.substr(start, p == std::string::npos ? std::string::npos : p - start));
+    if (p == std::string::npos) return out;
+    start = p + 1;
+  }
+}
+
+Result<double> number(const CameraSpec& spec, const std::string& key, double fallback,
+                      const std::string& scheme) {
+  auto it = spec.options.find(key);
+  if (it == spec.options.end()) return fallback;
+  char* end = nullptr;
+  const double v = std::strtod(it->second.c_str(), &end);
+  if (it->second.empty() || *end != '\0' || !std::isfinite(v))
+    return Status::invalidArgument(scheme + ": option " + key + "='" + it->second +
+                                   "' is not a number");
+  return v;
+}
+
+Result<int> integer(const CameraSpec& spec, const std::string& key, int fallback,
+                    const std::string& scheme) {
+  auto v = number(spec, key, fallback, scheme);
+  if (!v) return v.status();
+  if (*v != std::floor(*v) || std::abs(*v) > 1e9)
+    return Status::invalidArgument(scheme + ": option " + key + " must be an integer");
+  return static_cast<int>(*v);
+}
+
+Result<cv::Mat> readMatrix(const cv::FileStorage& fs, const std::string& key,
+                           const std::string& file, int rows, int cols) {
+  cv::Mat m;
+  const cv::FileNode node = fs[key];
+  if (node.empty()) return Status::corruptData(file + ": missing calibration key '" + key + "'");
+  node >> m;
+  if (m.empty() && !(key[0] == 'D'))
+    return Status::corruptData(file + ": key '" + key + "' is not a matrix");
+  if (!m.empty()) m.convertTo(m, CV_64F);
+  if (rows > 0 && (m.rows * m.cols != rows * cols))
+    return Status::corruptData(file + ": key '" + key + "' must have " +
+                               std::to_string(rows * cols) + " elements, has " +
+                               std::to_string(m.rows * m.cols));
+  if (rows > 0) m = m.reshape(1, rows);
+  if (!m.empty() && !cv::checkRange(m))
+    return Status::corruptData(file + ": key '" + key + "' contains NaN or infinity");
+  return m;
+}
+
+}  // namespace
+
+Result<CameraSpec> parseCameraSpec(const std::string& spec, const std::string& scheme,
+                                   const std::set<std::string>& allowed) {
+  CameraSpec out;
+  const std::size_t q = spec.find('?');
+  for (const std::string& d : split(spec.substr(0, q), ','))
+    if (!d.empty()) out.devices.push_back(d);
+  if (out.devices.empty())
+    return Status::invalidArgument(scheme + ": no camera given in '" + spec + "'");
+  if (q == std::string::npos) return out;
+  for (const std::string& kv : split(spec.substr(q + 1), '&')) {
+    if (kv.empty()) continue;
+    const std::size_t eq = kv.find('=');
+    const std::string key = kv.substr(0, eq);
+    if (!allowed.count(key))
+      return Status::invalidArgument(scheme + ": unknown option '" + key + "'");
+    if (eq == std::string::npos)
+      return Status::invalidArgument(scheme + ": option '" + key + "' needs a value");
+    out.options[key] = kv.substr(eq + 1);
+  }
+  return out;
+}
+
+Status StereoRectification::apply(const ImageU8& raw_left, const ImageU8& raw_right,
+                                  StereoFrame& out) const {
+  for (const ImageU8* raw : {&raw_left, &raw_right})
+    if (raw->width() != calib.width || raw->height() != calib.height)
+      return Status::invalidArgument("rectification: raw view is " + std::to_string(raw->width()) +
+                                     "x" + std::to_string(raw->height()) + ", calibration is for " +
+                                     std::to_string(calib.width) + "x" +
+                                     std::to_string(calib.height));
+  out.left.resize(calib.width, calib.height);
+  out.right.resize(calib.width, calib.height);
+  cv::Mat l = asMat(out.left), r = asMat(out.right);
+  cv::remap(asMat(raw_left), l, map_left_x, map_left_y, cv::INTER_LINEAR);
+  cv::remap(asMat(raw_right), r, map_right_x, map_right_y, cv::INTER_LINEAR);
+  return Status::ok();
+}
+
+Result<StereoRectification> loadStereoRectification(const std::string& file, int width,
+                                                    int height) {
+  try {
+    cv::FileStorage fs(file, cv::FileStorage::READ);
+    if (!fs.isOpened()) return Status::notFound("cannot open calibration file " + file);
+    cv::Mat K[2], D[2];
+    for (int i = 0; i < 2; ++i) {
+      const std::string n = std::to_string(i + 1);
+      auto k = readMatrix(fs, "K" + n, file, 3, 3);
+      if (!k) return k.status();
+      auto d = readMatrix(fs, "D" + n, file, 0, 0);
+      if (!d) return d.status();
+      K[i] = *k;
+      D[i] = d->empty() ? cv::Mat::zeros(1, 5, CV_64F) : d->reshape(1, 1);
+      if (!(K[i].at<double>(0, 0) > 0 && K[i].at<double>(1, 1) > 0))
+        return Status::corruptData(file + ": key 'K" + n + "' has focal lengths <= 0");
+    }
+    auto R = readMatrix(fs, "R", file, 3, 3);
+    if (!R) return R.status();
+    auto T = readMatrix(fs, "T", file, 3, 1);
+    if (!T) return T.status();
+    int size[2] = {0, 0};
+    const char* size_keys[2] = {"image_width", "image_height"};
+    for (int i = 0; i < 2; ++i) {
+      const cv::FileNode node = fs[size_keys[i]];
+      if (node.empty() || !node.isInt())
+        return Status::corruptData(file + ": missing calibration key '" + size_keys[i] + "'");
+      size[i] = static_cast<int>(node);
+    }
+    if (size[0] != width || size[1] != height)
+      return Status::invalidArgument(file + ": calibrated for " + std::to_string(size[0]) + "x" +
+                                     std::to_string(size[1]) + " but the capture is " +
+                                     std::to_string(width) + "x" + std::to_string(height));
+    const cv::Size sz(width, height);
+    cv::Mat R1, R2, P1, P2, Q;
+    cv::stereoRectify(K[0], D[0], K[1], D[1], sz, *R, *T, R1, R2, P1, P2, Q,
+                      cv::CALIB_ZERO_DISPARITY, 0.0);
+    StereoRectification rect;
+    cv::initUndistortRectifyMap(K[0], D[0], R1, P1, sz, CV_16SC2, rect.map_left_x, rect.map_left_y);
+    cv::initUndistortRectifyMap(K[1], D[1], R2, P2, sz, CV_16SC2, rect.map_right_x,
+                                rect.map_right_y);
+    rect.calib.f_px = P1.at<double>(0, 0);
+    rect.calib.cx_px = P1.at<double>(0, 2);
+    rect.calib.cy_px = P1.at<double>(1, 2);
+    rect.calib.baseline_m = -P2.at<double>(0, 3) / P2.at<double>(0, 0);
+    rect.calib.width = width;
+    rect.calib.height = height;
+    if (Status s = rect.calib.validate(); !s)
+      return Status(s.code(),
+                    file + ": rectified " + s.message() + " (is T in metres, right camera at +x?)");
+    return rect;
+  } catch (const cv::Exception& e) {
+    return Status::corruptData(file + ": cannot read calibration: " + e.what());
+  }
+}
+
+Result<bool> TimestampPairer::next(const GrabFn& grab, ImageU8& left, ImageU8& right,
+                                   TimeNs& t_ns) {
+  int drops_in_row = 0;
+  for (;;) {
+    for (int c = 0; c < 2; ++c) {
+      const auto i = static_cast<std::size_t>(c);
+      if (have_[i]) continue;
+      auto r = grab(c, head_[i], head_t_[i]);
+      if (!r || !*r) return r;
+      have_[i] = true;
+    }
+    const TimeNs dt = head_t_[0] - head_t_[1];
+    if (std::abs(dt) <= tolerance_ns_) break;
+    const std::size_t older = dt < 0 ? 0 : 1;
+    have_[older] = false;
+    ++dropped_[older];
+    if (++drops_in_row > max_drops_)
+      return Status::ioError("cameras not synchronised: " + std::to_string(drops_in_row) +
+                             " frames dropped in a row, last heads " +
+                             std::to_string(std::abs(dt) / kNsPerUs) + " us apart");
+  }
+  std::swap(left, head_[0]);
+  std::swap(right, head_[1]);
+  t_ns = head_t_[0];
+  have_ = {false, false};
+  return true;
+}
+
+V4l2StereoSource::V4l2StereoSource(std::vector<std::unique_ptr<V4l2Capture>> captures,
+                                   StereoRectification rect, TimeNs sync_tolerance_ns)
+    : captures_(std::move(captures)), rect_(std::move(rect)), pairer_(sync_tolerance_ns) {}
+
+Result<bool> V4l2StereoSource::next(StereoFrame& out) {
+  TimeNs t_ns = 0;
+  std::uint32_t seq = 0;
+  if (captures_.size() == 1) {
+    auto r = captures_[0]->grab(full_, t_ns, seq);
+    if (!r || !*r) return r;
+    if (Status s = splitSideBySide(full_, raw_left_, raw_right_); !s) return s;
+  } else {
+    auto r = pairer_.next(
+        [this, &seq](int c, ImageU8& img, TimeNs& t) {
+          return captures_[static_cast<std::size_t>(c)]->grab(img, t, seq);
+        },
+        raw_left_, raw_right_, t_ns);
+    if (!r || !*r) return r;
+  }
+  if (Status s = rect_.apply(raw_left_, raw_right_, out); !s) return s;
+  out.index = index_++;
+  out.t_ns = t_ns;
+  return true;
+}
+
+Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix,
+                                                     V4l2Device& device) {
+  auto spec = parseCameraSpec(
+      spec_after_prefix, "v4l2",
+      {"width", "height", "fps", "format", "calib", "sync_ms", "layout", "buffers", "timeout_ms"});
+  if (!spec) return spec.status();
+  V4l2CaptureParams p;
+  auto width = integer(*spec, "width", p.width, "v4l2");
+  auto height = integer(*spec, "height", p.height, "v4l2");
+  auto fps = number(*spec, "fps", p.fps, "v4l2");
+  auto sync_ms = number(*spec, "sync_ms", 5.0, "v4l2");
+  auto buffers = integer(*spec, "buffers", p.buffers, "v4l2");
+  auto timeout = integer(*spec, "timeout_ms", p.timeout_ms, "v4l2");
+  for (const Status* s : {&width.status(), &height.status(), &fps.status(), &sync_ms.status(),
+                          &buffers.status(), &timeout.status()})
+    if (!*s) return *s;
+  const auto& opt = spec->options;
+  const std::string layout = opt.count("layout") ? opt.at("layout") : "stereo";
+  if (layout != "stereo" && layout != "side-by-side")
+    return Status::invalidArgument("v4l2: layout must be 'stereo' or 'side-by-side', got '" +
+                                   layout + "'");
+  const bool sbs = layout == "side-by-side";
+  const std::size_t want = sbs ? 1 : 2;
+  if (spec->devices.size() != want)
+    return Status::invalidArgument(
+        "v4l2: " +
+        std::string(sbs ? "layout=side-by-side takes one device"
+                        : "two devices needed (DEV_LEFT,DEV_RIGHT) unless "
+                          "layout=side-by-side") +
+        ", got " + std::to_string(spec->devices.size()));
+  if (!(*sync_ms >= 0.0 && *sync_ms <= 1000.0))
+    return Status::invalidArgument("v4l2: sync_ms must be in [0, 1000]");
+  if (!opt.count("calib"))
+    return Status::invalidArgument(
+        "v4l2: calib=FILE is required (stereo calibration, see docs/cameras.md)");
+  p.width = *width;
+  p.height = *height;
+  p.fps = *fps;
+  p.buffers = *buffers;
+  p.timeout_ms = *timeout;
+  if (opt.count("format")) p.format = opt.at("format");
+  if (sbs && p.width % 2 != 0)
+    return Status::invalidArgument("v4l2: side-by-side width must be even");
+  for (const std::string& d : spec->devices) {
+    p.device = d;
+    if (Status s = p.validate(); !s) return s;
+  }
+  auto rect = loadStereoRectification(opt.at("calib"), sbs ? p.width / 2 : p.width, p.height);
+  if (!rect) return rect.status();
+  std::vector<std::unique_ptr<V4l2Capture>> caps;
+  for (const std::string& d : spec->devices) {
+    p.device = d;
+    caps.push_back(std::make_unique<V4l2Capture>(device, p));
+    if (Status s = caps.back()->open(); !s) return s;
+  }
+  return std::unique_ptr<StereoSource>(std::make_unique<V4l2StereoSource>(
+      std::move(caps), std::move(rect).value(),
+      static_cast<TimeNs>(std::llround(*sync_ms * static_cast<double>(kNsPerMs)))));
+}
+
+Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix) {
+  return openV4l2Source(spec_after_prefix, systemV4l2Device());
+}
+
+}  // namespace svslam::drivers

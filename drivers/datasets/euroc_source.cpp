@@ -1,0 +1,156 @@
+// euroc:DIR source (see stereo_source.hpp): raw distorted pairs rectified with OpenCV.
+#include <filesystem>
+#include <fstream>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <vector>
+
+#include "drivers/files/image_io.hpp"
+#include "drivers/files/opencv_view.hpp"
+#include "drivers/source/stereo_source.hpp"
+#include "drivers/files/trajectory_io.hpp"
+#include "drivers/files/yaml_lists.hpp"
+
+namespace fs = std::filesystem;
+
+namespace svslam::drivers {
+namespace {
+
+struct EurocCamera {
+  cv::Mat K, D;
+  cv::Size size;
+  Eigen::Isometry3d T_BS;
+  std::vector<TimeNs> t_ns;
+  std::vector<std::string> files;
+};
+
+Result<EurocCamera> readCamera(const fs::path& cam_dir) {
+  const std::string yaml = (cam_dir / "sensor.yaml").string();
+  auto text = readTextFile(yaml);
+  if (!text) return text.status();
+  auto intr = yamlNumberList(*text, "", "intrinsics", yaml);
+  if (!intr) return intr.status();
+  auto dist = yamlNumberList(*text, "", "distortion_coefficients", yaml);
+  if (!dist) return dist.status();
+  auto res = yamlNumberList(*text, "", "resolution", yaml);
+  if (!res) return res.status();
+  auto tbs = readEurocTbs(yaml);
+  if (!tbs) return tbs.status();
+  if (intr->size() != 4 || dist->size() != 4 || res->size() != 2)
+    return Status::corruptData(
+        yaml +
+        ": expected intrinsics [fu fv cu cv], 4 distortion coefficients and resolution [w h]");
+  EurocCamera c;
+  c.K = (cv::Mat_<double>(3, 3) << (*intr)[0], 0, (*intr)[2], 0, (*intr)[1], (*intr)[3], 0, 0, 1);
+  c.D = (cv::Mat_<double>(1, 4) << (*dist)[0], (*dist)[1], (*dist)[2], (*dist)[3]);
+  c.size = cv::Size(static_cast<int>((*res)[0]), static_cast<int>((*res)[1]));
+  if ((*intr)[0] <= 0 || (*intr)[1] <= 0 || c.size.width <= 0 || c.size.height <= 0)
+    return Status::corruptData(yaml + ": focal lengths and resolution must be > 0");
+  c.T_BS = *tbs;
+  const std::string csv = (cam_dir / "data.csv").string();
+  std::ifstream f(csv);
+  if (!f) return Status::notFound("cannot open " + csv);
+  std::string line;
+  int line_no = 0;
+  while (std::getline(f, line)) {
+    ++line_no;
+    if (line.empty() || line[0] == '#') continue;
+    const auto comma = line.find(',');
+    if (comma == std::string::npos)
+      return Status::corruptData(csv + ":" + std::to_string(line_no) +
+                                 ": expected 'timestamp,filename'");
+    std::string name = line.substr(comma + 1);
+    while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
+    try {
+      c.t_ns.push_back(std::stoll(line.substr(0, comma)));
+    } catch (const std::exception&) {
+      return Status::corruptData(csv + ":" + std::to_string(line_no) + ": bad timestamp");
+    }
+    c.files.push_back((cam_dir / "data" / name).string());
+  }
+  if (c.files.empty()) return Status::corruptData(csv + ": no image listed");
+  return c;
+}
+
+class EurocSource final : public StereoSource {
+ public:
+  EurocSource(EurocCamera c0, EurocCamera c1, StereoCalibration calib, cv::Mat m0x, cv::Mat m0y,
+              cv::Mat m1x, cv::Mat m1y)
+      : c0_(std::move(c0)),
+        c1_(std::move(c1)),
+        calib_(calib),
+        m0x_(m0x),
+        m0y_(m0y),
+        m1x_(m1x),
+        m1y_(m1y) {}
+  const StereoCalibration& calibration() const override { return calib_; }
+  int size() const override { return static_cast<int>(c0_.files.size()); }
+  Result<bool> next(StereoFrame& out) override {
+    if (pos_ >= c0_.files.size()) return false;
+    for (int side = 0; side < 2; ++side) {
+      const std::string& path = side == 0 ? c0_.files[pos_] : c1_.files[pos_];
+      auto raw = loadGrey(path);
+      if (!raw) return raw.status();
+      if (raw->width() != c0_.size.width || raw->height() != c0_.size.height)
+        return Status::corruptData(path + ": image size differs from sensor.yaml's resolution");
+      ImageU8& dst = side == 0 ? out.left : out.right;
+      dst.resize(calib_.width, calib_.height);
+      cv::Mat dst_mat = asMat(dst);
+      cv::remap(asMat(*raw), dst_mat, side == 0 ? m0x_ : m1x_, side == 0 ? m0y_ : m1y_,
+                cv::INTER_LINEAR);
+    }
+    out.index = static_cast<int>(pos_);
+    out.t_ns = c0_.t_ns[pos_];
+    ++pos_;
+    return true;
+  }
+
+ private:
+  EurocCamera c0_, c1_;
+  StereoCalibration calib_;
+  cv::Mat m0x_, m0y_, m1x_, m1y_;
+  std::size_t pos_ = 0;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<StereoSource>> openEurocSource(const std::string& dir) {
+  const fs::path mav = fs::path(dir) / "mav0";
+  if (!fs::is_directory(mav / "cam0") || !fs::is_directory(mav / "cam1"))
+    return Status::notFound("EuRoC folder " + dir + " has no mav0/cam0 and mav0/cam1");
+  auto c0 = readCamera(mav / "cam0");
+  if (!c0) return c0.status();
+  auto c1 = readCamera(mav / "cam1");
+  if (!c1) return c1.status();
+  if (c0->t_ns != c1->t_ns)
+    return Status::corruptData("EuRoC cam0 and cam1 list different timestamps in " + dir);
+  if (c0->size != c1->size)
+    return Status::corruptData("EuRoC cam0 and cam1 resolutions differ in " + dir);
+  // p_cam1 = R p_cam0 + T with T_cam1_cam0 = T_BS1^-1 T_BS0.
+  const Eigen::Isometry3d T10 = c1->T_BS.inverse() * c0->T_BS;
+  cv::Mat R(3, 3, CV_64F), T(3, 1, CV_64F);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) R.at<double>(r, c) = T10.linear()(r, c);
+    T.at<double>(r, 0) = T10.translation()(r);
+  }
+  cv::Mat R0, R1, P0, P1, Q;
+  cv::stereoRectify(c0->K, c0->D, c1->K, c1->D, c0->size, R, T, R0, R1, P0, P1, Q,
+                    cv::CALIB_ZERO_DISPARITY, 0.0);
+  cv::Mat m0x, m0y, m1x, m1y;
+  cv::initUndistortRectifyMap(c0->K, c0->D, R0, P0, c0->size, CV_16SC2, m0x, m0y);
+  cv::initUndistortRectifyMap(c1->K, c1->D, R1, P1, c1->size, CV_16SC2, m1x, m1y);
+  StereoCalibration calib;
+  calib.f_px = P0.at<double>(0, 0);
+  calib.cx_px = P0.at<double>(0, 2);
+  calib.cy_px = P0.at<double>(1, 2);
+  calib.baseline_m = -P1.at<double>(0, 3) / P1.at<double>(0, 0);
+  calib.width = c0->size.width;
+  calib.height = c0->size.height;
+  if (Status s = calib.validate(); !s)
+    return Status(s.code(), "EuRoC rectification of " + dir + ": " + s.message());
+  return std::unique_ptr<StereoSource>(std::make_unique<EurocSource>(
+      std::move(c0).value(), std::move(c1).value(), calib, m0x, m0y, m1x, m1y));
+}
+
+}  // namespace svslam::drivers

@@ -1,0 +1,133 @@
+#include "drivers/files/trajectory_io.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "drivers/files/yaml_lists.hpp"
+
+namespace svslam::drivers {
+namespace {
+
+std::string where(const std::string& path, int line) { return path + ":" + std::to_string(line); }
+
+}  // namespace
+
+Result<TrajectoryFile> readTrajectory(const std::string& path) {
+  if (!std::filesystem::exists(path))
+    return Status::notFound("trajectory file does not exist: " + path);
+  std::ifstream f(path);
+  if (!f) return Status::ioError("cannot open trajectory file " + path);
+  TrajectoryFile out;
+  std::string line;
+  int line_no = 0;
+  int expected = 0;
+  while (std::getline(f, line)) {
+    ++line_no;
+    if (auto h = line.find('#'); h != std::string::npos) line = line.substr(0, h);
+    for (char& c : line)
+      if (c == ',') c = ' ';
+    std::istringstream s(line);
+    std::vector<double> v;
+    std::string tok;
+    while (s >> tok) {
+      char* end = nullptr;
+      const double d = std::strtod(tok.c_str(), &end);
+      if (end == tok.c_str() || *end != '\0')
+        return Status::corruptData(where(path, line_no) + ": '" + tok + "' is not a number");
+      v.push_back(d);
+    }
+    if (v.empty()) continue;
+    if (expected == 0) {
+      if (v.size() != 12 && v.size() != 8)
+        return Status::corruptData(where(path, line_no) +
+                                   ": expected 12 values (KITTI) or 8 (TUM), got " +
+                                   std::to_string(v.size()));
+      expected = static_cast<int>(v.size());
+      out.format = expected == 12 ? TrajectoryFormat::kKitti : TrajectoryFormat::kTum;
+    }
+    if (static_cast<int>(v.size()) != expected)
+      return Status::corruptData(where(path, line_no) + ": expected " + std::to_string(expected) +
+                                 " values, got " + std::to_string(v.size()));
+    for (double d : v)
+      if (!std::isfinite(d)) return Status::corruptData(where(path, line_no) + ": NaN or infinity");
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    if (expected == 12) {
+      Eigen::Matrix3d R;
+      R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
+      // Files store 7 significant digits: project onto a rotation (nearest unit quaternion).
+      T.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
+      T.translation() = Eigen::Vector3d(v[3], v[7], v[11]);
+    } else {
+      Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // w, x, y, z
+      if (q.norm() < 1e-6) return Status::corruptData(where(path, line_no) + ": zero quaternion");
+      T.linear() = q.normalized().toRotationMatrix();
+      T.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+      out.t_ns.push_back(v[0] > 1e12 ? static_cast<TimeNs>(std::llround(v[0])) : secondsToNs(v[0]));
+    }
+    out.poses.push_back(T);
+  }
+  if (out.poses.empty()) return Status::corruptData("no pose in trajectory file " + path);
+  return out;
+}
+
+Result<Eigen::Isometry3d> readEurocTbs(const std::string& sensor_yaml) {
+  auto text = readTextFile(sensor_yaml);
+  if (!text) return text.status();
+  auto v = yamlNumberList(*text, "T_BS", "data", sensor_yaml);
+  if (!v) return v.status();
+  if (v->size() != 16) return Status::corruptData(sensor_yaml + ": T_BS data must have 16 numbers");
+  Eigen::Matrix4d M;
+  for (int i = 0; i < 16; ++i) M(i / 4, i % 4) = (*v)[static_cast<std::size_t>(i)];
+  Eigen::Isometry3d T;
+  T.matrix() = M;
+  return T;
+}
+
+Status associateTrajectories(const TrajectoryFile& gt, const TrajectoryFile& est, double max_dt_s,
+                             std::vector<Eigen::Isometry3d>& gt_out,
+                             std::vector<Eigen::Isometry3d>& est_out,
+                             std::vector<std::size_t>* est_index) {
+  gt_out.clear();
+  est_out.clear();
+  if (est_index) est_index->clear();
+  if (gt.t_ns.empty() || est.t_ns.empty()) {
+    if (gt.poses.size() != est.poses.size())
+      return Status::invalidArgument(
+          "trajectories without timestamps are paired by index, but they have " +
+          std::to_string(gt.poses.size()) + " and " + std::to_string(est.poses.size()) + " poses");
+    gt_out = gt.poses;
+    est_out = est.poses;
+    if (est_index)
+      for (std::size_t i = 0; i < est.poses.size(); ++i) est_index->push_back(i);
+    return Status::ok();
+  }
+  if (!std::is_sorted(gt.t_ns.begin(), gt.t_ns.end()))
+    return Status::invalidArgument("ground-truth timestamps are not in increasing order");
+  const TimeNs max_dt = secondsToNs(max_dt_s);
+  for (std::size_t i = 0; i < est.t_ns.size(); ++i) {
+    const auto it = std::lower_bound(gt.t_ns.begin(), gt.t_ns.end(), est.t_ns[i]);
+    std::size_t best = gt.t_ns.size();
+    TimeNs best_dt = max_dt + 1;
+    for (auto c : {it, it == gt.t_ns.begin() ? it : it - 1}) {
+      if (c == gt.t_ns.end()) continue;
+      const TimeNs dt = std::llabs(*c - est.t_ns[i]);
+      if (dt < best_dt) {
+        best_dt = dt;
+        best = static_cast<std::size_t>(c - gt.t_ns.begin());
+      }
+    }
+    if (best == gt.t_ns.size()) continue;  // no ground truth close enough
+    gt_out.push_back(gt.poses[best]);
+    est_out.push_back(est.poses[i]);
+    if (est_index) est_index->push_back(i);
+  }
+  if (gt_out.size() < 3)
+    return Status::invalidArgument("fewer than 3 estimate stamps have ground truth within " +
+                                   std::to_string(max_dt_s) + " s");
+  return Status::ok();
+}
+
+}  // namespace svslam::drivers

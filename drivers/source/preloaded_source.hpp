@@ -1,0 +1,38 @@
+#pragma once
+// A recorded source read entirely into memory before a run, so that a paced replay measures the
+// pipeline rather than the disk or the synthetic renderer. next() copies the stored pair into
+// the caller's buffers (no allocation once they have the size).
+#include <memory>
+#include <vector>
+
+#include "drivers/source/stereo_source.hpp"
+
+namespace svslam::drivers {
+
+class PreloadedSource final : public StereoSource {
+ public:
+  const StereoCalibration& calibration() const override { return inner_->calibration(); }
+  int size() const override { return static_cast<int>(frames_.size()); }
+  Result<bool> next(StereoFrame& out) override;
+  bool groundTruth(int index, Eigen::Isometry3d& T_first_cam) const override {
+    return inner_->groundTruth(index, T_first_cam);
+  }
+  // Starts again from the first frame (a benchmark replays the same frames twice).
+  void rewind() { next_ = 0; }
+
+ private:
+  friend Result<std::unique_ptr<PreloadedSource>> preload(std::unique_ptr<StereoSource>, int);
+  std::unique_ptr<StereoSource> inner_;
+  std::vector<StereoFrame> frames_;
+  std::size_t next_ = 0;
+};
+
+// Reads up to `max_frames` pairs (0 = all) of `inner` (which must be finite: size() >= 0).
+// Error when a frame cannot be read or the source is live.
+Result<std::unique_ptr<PreloadedSource>> preload(std::unique_ptr<StereoSource> inner,
+                                                 int max_frames);
+// The same, as a plain StereoSource.
+Result<std::unique_ptr<StereoSource>> preloadSource(std::unique_ptr<StereoSource> inner,
+                                                    int max_frames);
+
+}  // namespace svslam::drivers

@@ -1,0 +1,55 @@
+#pragma once
+// Stereo sequence sources: each yields timestamped, rectified grey stereo pairs and the
+// rectified calibration (left camera, baseline along +x).
+//   kitti:DIR  KITTI odometry layout: image_0/ + image_1/ (or image_l/ + image_r/), calib.txt
+//              with P0 and P1 (labelled "P0:" or not), optional times.txt (s); else 10 Hz.
+//   euroc:DIR  EuRoC ASL layout: mav0/cam0, mav0/cam1 (data.csv, sensor.yaml with pinhole
+//              intrinsics, radial-tangential distortion, T_BS); rectified with OpenCV
+//              (stereoRectify, precomputed remap maps).
+//   synthetic[:key=value,...]  rendered stereo flight over a textured heightfield with exact
+//              ground truth (synthetic_flight.hpp); the built-in default source.
+#include <Eigen/Geometry>
+#include <memory>
+#include <string>
+
+#include "core/camera.hpp"
+#include "core/image.hpp"
+#include "core/status.hpp"
+#include "core/time.hpp"
+
+namespace svslam::drivers {
+
+struct StereoFrame {
+  int index = 0;  // 0-based position in the sequence
+  TimeNs t_ns = 0;
+  ImageU8 left, right;  // rectified, grey
+};
+
+class StereoSource {
+ public:
+  virtual ~StereoSource() = default;
+  virtual const StereoCalibration& calibration() const = 0;
+  // Number of frames, or -1 when unknown (live cameras).
+  virtual int size() const = 0;
+  // Reads the next pair into `out` (buffers reused); returns false at the end of the sequence.
+  // A missing or corrupt image is an error naming the file.
+  virtual Result<bool> next(StereoFrame& out) = 0;
+  // Ground-truth pose of frame `index` when the source knows it exactly (synthetic): the left
+  // camera in the frame of the first left camera (KITTI convention). False otherwise.
+  virtual bool groundTruth(int index, Eigen::Isometry3d& T_first_cam) const {
+    (void)index;
+    (void)T_first_cam;
+    return false;
+  }
+};
+
+Result<std::unique_ptr<StereoSource>> openKittiSource(const std::string& dir);
+Result<std::unique_ptr<StereoSource>> openEurocSource(const std::string& dir);
+
+// "synthetic[:key=value,...]" (keys in synthetic_flight.hpp).
+Result<std::unique_ptr<StereoSource>> openSyntheticSource(const std::string& options);
+
+// "kitti:DIR", "euroc:DIR" or "synthetic[:key=value,...]".
+Result<std::unique_ptr<StereoSource>> openStereoSource(const std::string& spec);
+
+}  // namespace svslam::drivers

@@ -1,0 +1,95 @@
+// Trajectory files: KITTI and TUM parsing, EuRoC T_BS, association, and errors naming the line.
+#include "drivers/files/trajectory_io.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+
+namespace svslam::drivers {
+namespace {
+
+class TrajectoryIo : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("svslam_traj_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string write(const std::string& name, const std::string& text) {
+    const std::string p = (dir_ / name).string();
+    std::ofstream(p) << text;
+    return p;
+  }
+  fs::path dir_;
+};
+
+TEST_F(TrajectoryIo, ReadsKittiAndTum) {
+  auto k = readTrajectory(
+      write("k.txt", "1 0 0 1 0 1 0 2 0 0 1 3\n# comment\n1 0 0 4 0 1 0 5 0 0 1 6\n"));
+  ASSERT_TRUE(k.isOk()) << k.status().message();
+  EXPECT_EQ(k->format, TrajectoryFormat::kKitti);
+  ASSERT_EQ(k->poses.size(), 2u);
+  EXPECT_TRUE(k->poses[1].translation().isApprox(Eigen::Vector3d(4, 5, 6)));
+  EXPECT_TRUE(k->t_ns.empty());
+  auto t = readTrajectory(write("t.txt",
+                                "# t tx ty tz qx qy qz qw\n1.5 1 2 3 0 0 0 1\n1403636584763555584 "
+                                "0 0 0 0 0 0.7071068 0.7071068\n"));
+  ASSERT_TRUE(t.isOk()) << t.status().message();
+  EXPECT_EQ(t->format, TrajectoryFormat::kTum);
+  EXPECT_EQ(t->t_ns[0], 1500000000);
+  EXPECT_EQ(t->t_ns[1], 1403636584763555584);          // large values are nanoseconds
+  EXPECT_NEAR(t->poses[1].linear()(1, 0), 1.0, 1e-6);  // 90 deg about z
+}
+
+TEST_F(TrajectoryIo, ErrorsNameFileAndLine) {
+  auto missing = readTrajectory((dir_ / "nope.txt").string());
+  EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
+  auto short_line = readTrajectory(write("a.txt", "1 0 0 1 0 1 0 2 0 0 1 3\n1 0 0\n"));
+  ASSERT_FALSE(short_line.isOk());
+  EXPECT_NE(short_line.status().message().find("a.txt:2"), std::string::npos)
+      << short_line.status().message();
+  auto word = readTrajectory(write("b.txt", "1 0 0 one 0 1 0 2 0 0 1 3\n"));
+  EXPECT_FALSE(word.isOk());
+  auto nan = readTrajectory(write("c.txt", "1 0 0 nan 0 1 0 2 0 0 1 3\n"));
+  EXPECT_FALSE(nan.isOk());
+  auto empty = readTrajectory(write("d.txt", "# nothing\n"));
+  EXPECT_FALSE(empty.isOk());
+  auto zero_q = readTrajectory(write("e.txt", "1 0 0 0 0 0 0 0\n"));
+  EXPECT_FALSE(zero_q.isOk());
+}
+
+TEST_F(TrajectoryIo, AssociatesByIndexOrStamp) {
+  TrajectoryFile a, b;
+  for (int i = 0; i < 5; ++i) {
+    a.poses.push_back(Eigen::Isometry3d::Identity());
+    b.poses.push_back(Eigen::Isometry3d::Identity());
+  }
+  std::vector<Eigen::Isometry3d> g, e;
+  EXPECT_TRUE(associateTrajectories(a, b, 0.01, g, e).isOk());
+  EXPECT_EQ(g.size(), 5u);
+  b.poses.pop_back();
+  EXPECT_FALSE(associateTrajectories(a, b, 0.01, g, e).isOk());  // by index: counts differ
+  a.format = b.format = TrajectoryFormat::kTum;
+  a.t_ns = {0, 100000000, 200000000, 300000000, 400000000};
+  b.t_ns = {5000000, 205000000, 290000000, 1000000000};
+  ASSERT_TRUE(associateTrajectories(a, b, 0.02, g, e).isOk());
+  EXPECT_EQ(g.size(), 3u);  // the 1 s stamp has no ground truth within 20 ms
+}
+
+TEST_F(TrajectoryIo, EurocTbs) {
+  const std::string data =
+      std::string(SVSLAM_DATA_DIR) + "/euroc_mh01_first320/mav0/cam0/sensor.yaml";
+  if (!fs::exists(data)) GTEST_SKIP() << "shared data absent: " << data;
+  auto T = readEurocTbs(data);
+  ASSERT_TRUE(T.isOk()) << T.status().message();
+  EXPECT_NEAR(T->linear().determinant(), 1.0, 1e-6);
+  EXPECT_NEAR(T->translation().x(), -0.0216401454975, 1e-12);
+  EXPECT_FALSE(readEurocTbs(write("s.yaml", "T_BS:\n  data: [1, 2, 3]\n")).isOk());
+}
+
+}  // namespace
+}  // namespace svslam::drivers
