@@ -19,7 +19,7 @@
 #include "pipeline/cli/json_writer.hpp"
 #include "pipeline/config/run_config.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
-#include "pipeline/realtime/stage_work.hpp"
+#include "pipeline/realtime/slam_stages.hpp"
 #include "pipeline/run/run_outputs.hpp"
 #include "pipeline/run/run_summary.hpp"
 #include "pipeline/service/sd_notify.hpp"
@@ -68,7 +68,7 @@ Status applyOverrides(const ArgParser& p, config::RunConfig& cfg) {
 }
 
 // Applies the LCM commands received since the last tick and answers each on the status channel.
-void handleCommands(drivers::LcmLink& lcm, rt::RunWork& work, rt::PipelineControl& control) {
+void handleCommands(drivers::LcmLink& lcm, rt::SlamStages& work, rt::PipelineControl& control) {
   std::vector<drivers::Command> cmds;
   if (!lcm.pollCommands(0, cmds)) return;
   for (const drivers::Command& c : cmds) {
@@ -186,19 +186,23 @@ int runPipeline(const std::vector<std::string>& args) {
   }
   if (Status s = service::installStopSignalHandlers(); !s) return fail(s);
 
-  rt::RunWork work(cfg, *source, out_dir, lcm.get());
+  rt::SlamStages work(cfg, *source, out_dir, lcm.get());
   if (Status s = work.init(); !s) return fail(s);
 
   rt::PipelineOptions opts;
   opts.sequential = cfg.pipeline.sequential;
   opts.rate_hz = cfg.pipeline.rate_hz;
   opts.queue_capacity = cfg.pipeline.queue_capacity;
-  opts.keep_newest = cfg.pipeline.capture_policy == "newest" ||
-                     (cfg.pipeline.capture_policy == "auto" && (live || opts.rate_hz > 0));
   if (Status s = opts.validate(); !s) return fail(s);
+  const bool keep_newest = cfg.pipeline.capture_policy == "newest" ||
+                           (cfg.pipeline.capture_policy == "auto" && (live || opts.rate_hz > 0));
+  rt::PipelineRunner runner(opts,
+                            work.graph(keep_newest ? rt::EdgePolicy::kNewest
+                                                   : rt::EdgePolicy::kBlocking));
+  work.setTimings(&runner.timings());
   std::vector<std::unique_ptr<rt::FrameSlot>> slots;
   const StereoCalibration& calib = source->calibration();
-  for (int i = 0; i < rt::PipelineRunner::slotsNeeded(opts); ++i) {
+  for (int i = 0; i < runner.slotsNeeded(); ++i) {
     auto slot = std::make_unique<rt::FrameSlot>();
     slot->frame.left.resize(calib.width, calib.height);
     slot->frame.right.resize(calib.width, calib.height);
@@ -210,7 +214,6 @@ int runPipeline(const std::vector<std::string>& args) {
   const std::int64_t wd_interval = notifier.watchdogIntervalNs();
   service::HealthWatchdog watchdog(wd_interval,
                                    static_cast<std::int64_t>(cfg.service.stall_timeout_s * 1e9));
-  rt::PipelineRunner runner(opts, work);
   rt::PipelineControl control;
   bool ready_sent = false, stopping_sent = false;
   if (cfg.service.ready == "start") {

@@ -10,10 +10,15 @@
 //                  replays, where a late frame is worth less than the next one.
 // Both: exactly one producer thread and one consumer thread; close() (by the producer) ends the
 // stream after the items already queued. Counters are readable from any thread.
+//   FeedbackCell   a value a later stage hands back to an earlier one about frame `seq` (the
+//                  estimator's predicted motion for the stereo stage's ROIs); the reader waits
+//                  for the frame it needs on the sequence number (C++20 atomic wait: a futex,
+//                  no lock).
 #include <atomic>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <readerwriterqueue/atomicops.h>
 #include <readerwriterqueue/readerwritercircularbuffer.h>
 
@@ -105,6 +110,43 @@ class NewestEdge {
   std::atomic<bool> closed_{false};
   std::atomic<std::int64_t> drops_{0};
   std::atomic<int> max_depth_{0};
+};
+
+// One writer thread publishes the value of frame `seq`, one reader thread waits for it. The
+// reader asks for the frame it last handed downstream, and the writer cannot move past that
+// frame until the reader sends the next one, so a value is never overwritten while read.
+template <class T>
+class FeedbackCell {
+ public:
+  void publish(std::int64_t seq, const T& value) {
+    value_ = value;
+    seq_.store(seq, std::memory_order_release);
+    seq_.notify_all();
+  }
+  // Waits until the value of frame `seq` (or a later one) is there and copies it into `out`;
+  // false when the cell was closed first.
+  bool wait(std::int64_t seq, T& out) {
+    for (;;) {
+      const std::int64_t cur = seq_.load(std::memory_order_acquire);
+      if (cur == kClosed) return false;
+      if (cur >= seq) break;
+      seq_.wait(cur, std::memory_order_acquire);
+    }
+    out = value_;
+    return true;
+  }
+  // No value will come any more: every wait returns false.
+  void close() {
+    seq_.store(kClosed, std::memory_order_release);
+    seq_.notify_all();
+  }
+  // Back to empty (between runs, no thread waiting).
+  void reset() { seq_.store(-1, std::memory_order_relaxed); }
+
+ private:
+  static constexpr std::int64_t kClosed = std::numeric_limits<std::int64_t>::max();
+  T value_{};
+  std::atomic<std::int64_t> seq_{-1};
 };
 
 }  // namespace svslam::rt

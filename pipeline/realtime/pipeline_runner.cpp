@@ -31,25 +31,101 @@ void sleepUntil(std::int64_t due_ns, const PipelineControl& control) {
   }
 }
 
-// Replay pacing: frame k is due at start + k / rate, shifted by the time spent paused.
-class Pacer {
+// The edge into a stage: a blocking FIFO or a newest-frame mailbox.
+class StageEdge {
  public:
-  explicit Pacer(double rate_hz)
-      : period_ns_(rate_hz > 0 ? static_cast<std::int64_t>(1e9 / rate_hz) : 0) {}
-  bool active() const { return period_ns_ > 0; }
-  std::int64_t due(std::int64_t k) {
-    if (start_ns_ < 0) start_ns_ = steadyNowNs();
-    return start_ns_ + k * period_ns_ + paused_ns_;
+  StageEdge(EdgePolicy policy, int capacity) {
+    if (policy == EdgePolicy::kNewest)
+      newest_ = std::make_unique<NewestEdge<FrameSlot>>();
+    else
+      fifo_ = std::make_unique<BlockingEdge<FrameSlot>>(static_cast<std::size_t>(capacity));
   }
-  void paused(std::int64_t ns) { paused_ns_ += ns; }
+  // Returns the slot the push displaced (kNewest), else nullptr.
+  FrameSlot* push(FrameSlot* slot) {
+    if (newest_) return newest_->push(slot);
+    fifo_->push(slot);
+    return nullptr;
+  }
+  bool pop(FrameSlot*& out) {
+    return newest_ ? newest_->pop(out, kPollTimeout) : fifo_->pop(out, kPollTimeout);
+  }
+  void close() { newest_ ? newest_->close() : fifo_->close(); }
+  EdgeReport report(const std::string& name) const {
+    if (newest_) return {name, newest_->capacity(), newest_->maxDepth(), 0, newest_->drops()};
+    return {name, fifo_->capacity(), fifo_->maxDepth(), 0, 0};
+  }
 
  private:
-  std::int64_t period_ns_;
-  std::int64_t start_ns_ = -1;
-  std::int64_t paused_ns_ = 0;
+  std::unique_ptr<NewestEdge<FrameSlot>> newest_;
+  std::unique_ptr<BlockingEdge<FrameSlot>> fifo_;
 };
 
 }  // namespace
+
+// Capture, shared by both modes: pause, replay pacing (frame k is due at start + k / rate,
+// shifted by the time spent paused), the source's read, stamps and sequence numbers.
+class PipelineRunner::Capture {
+ public:
+  Capture(const SourceSpec& source, double rate_hz, PipelineControl& control,
+          std::atomic<std::int64_t>& captured)
+      : source_(source),
+        period_ns_(rate_hz > 0 ? static_cast<std::int64_t>(1e9 / rate_hz) : 0),
+        control_(control),
+        captured_(captured) {}
+  // True while paused (after a short sleep): the caller loops back to its stop check.
+  bool paused() {
+    if (!control_.pause.load()) return false;
+    const std::int64_t p0 = steadyNowNs();
+    std::this_thread::sleep_for(milliseconds(10));
+    paused_ns_ += steadyNowNs() - p0;
+    return true;
+  }
+  // The next frame into `slot`; false at the end of the stream or on stop.
+  Result<bool> read(FrameSlot& slot) {
+    std::int64_t start = steadyNowNs();
+    if (period_ns_ > 0) {
+      if (start_ns_ < 0) start_ns_ = start;
+      const std::int64_t due = start_ns_ + k_ * period_ns_ + paused_ns_;
+      sleepUntil(due, control_);
+      start = due;
+    }
+    if (control_.stop.load()) return false;
+    slot.stamps = FrameStamps{};
+    slot.stamps.capture_ns = start;
+    slot.stamps.read_start_ns = steadyNowNs();
+    auto more = source_.read(slot);
+    if (!more || !*more) return more;
+    slot.stamps.captured_ns = steadyNowNs();
+    if (period_ns_ <= 0) slot.stamps.capture_ns = slot.stamps.captured_ns;
+    slot.seq = k_++;
+    slot.failed = false;
+    captured_.fetch_add(1, std::memory_order_relaxed);
+    return true;
+  }
+
+ private:
+  const SourceSpec& source_;
+  std::int64_t period_ns_;
+  PipelineControl& control_;
+  std::atomic<std::int64_t>& captured_;
+  std::int64_t start_ns_ = -1, paused_ns_ = 0, k_ = 0;
+};
+
+Status StageGraph::validate() const {
+  if (!source.read) return Status::invalidArgument("pipeline: the source has no read function");
+  if (stages.empty() || static_cast<int>(stages.size()) > FrameStamps::kMaxStages)
+    return Status::invalidArgument("pipeline: 1 to " + std::to_string(FrameStamps::kMaxStages) +
+                                   " stages after the source");
+  for (std::size_t i = 0; i < stages.size(); ++i) {
+    if (!stages[i].work) return Status::invalidArgument("pipeline: stage '" + stages[i].name +
+                                                        "' has no work function");
+    // A displaced slot goes back to the source: only the source can take it.
+    if (i > 0 && stages[i].input == EdgePolicy::kNewest)
+      return Status::invalidArgument("pipeline: stage '" + stages[i].name +
+                                     "': only the first stage's input may keep the newest frame");
+  }
+  return Status::ok();
+}
 
 Status PipelineOptions::validate() const {
   if (!(rate_hz >= 0.0 && rate_hz <= 10000.0))
@@ -59,152 +135,136 @@ Status PipelineOptions::validate() const {
   return Status::ok();
 }
 
-PipelineRunner::PipelineRunner(const PipelineOptions& options, PipelineWork& work)
-    : options_(options), work_(work) {}
+StageTimings::StageTimings(const StageGraph& graph) {
+  names_.push_back(graph.source.name);
+  for (const StageSpec& s : graph.stages) names_.push_back(s.name);
+  per_stage_.resize(names_.size());
+}
+
+void StageTimings::record(const FrameSlot& slot) {
+  const FrameStamps& st = slot.stamps;
+  per_stage_[0].add(st.captured_ns - st.read_start_ns);
+  for (std::size_t i = 1; i < per_stage_.size(); ++i)
+    per_stage_[i].add(st.end_ns[i - 1] - st.start_ns[i - 1]);
+  e2e_.add(st.end_ns[per_stage_.size() - 2] - st.capture_ns);
+}
+
+void StageTimings::clear() {
+  for (LatencyRecorder& r : per_stage_) r.clear();
+  e2e_.clear();
+}
+
+LatencySummary PipelineReport::stage(const std::string& name) const {
+  for (const StageReport& s : stages)
+    if (s.name == name) return s.latency;
+  return LatencySummary{};
+}
+
+PipelineRunner::PipelineRunner(const PipelineOptions& options, StageGraph graph)
+    : options_(options), graph_(std::move(graph)), timings_(graph_) {}
 
 PipelineRunner::~PipelineRunner() = default;
 
-int PipelineRunner::slotsNeeded(const PipelineOptions& o) {
+int PipelineRunner::slotsNeeded(const PipelineOptions& o, const StageGraph& g) {
   if (o.sequential) return 1;
-  // One held by each of the four stages, the capture edge (1 for the mailbox, else its
-  // capacity), the two blocking edges, and one spare so capture rarely waits for a free slot.
-  const int capture_edge = o.keep_newest ? 1 : o.queue_capacity;
-  return 4 + capture_edge + 2 * o.queue_capacity + 1;
+  // One held by the source and by each stage, every edge full, and one spare so capture
+  // rarely waits for a free slot.
+  int n = 1 + static_cast<int>(g.stages.size()) + 1;
+  for (const StageSpec& s : g.stages) n += s.input == EdgePolicy::kNewest ? 1 : o.queue_capacity;
+  return n;
 }
 
 Status PipelineRunner::run(std::vector<std::unique_ptr<FrameSlot>>& slots,
                            PipelineControl& control, const std::function<void()>& tick,
                            int tick_ms) {
   if (Status s = options_.validate(); !s) return s;
-  if (static_cast<int>(slots.size()) < slotsNeeded(options_))
+  if (Status s = graph_.validate(); !s) return s;
+  if (static_cast<int>(slots.size()) < slotsNeeded())
     return Status::invalidArgument("pipeline: " + std::to_string(slots.size()) +
-                                   " frame slots, needs " +
-                                   std::to_string(slotsNeeded(options_)));
+                                   " frame slots, needs " + std::to_string(slotsNeeded()));
   report_ = PipelineReport{};
+  timings_.clear();
   published_ = 0;
   captured_ = 0;
   const std::int64_t t0 = steadyNowNs();
   Status s = options_.sequential ? runSequential(slots, control, tick)
                                  : runThreaded(slots, control, tick, std::max(tick_ms, 1));
+  report_.error = s;
   report_.wall_s = static_cast<double>(steadyNowNs() - t0) * 1e-9;
+  finishReport();
+  return s;
+}
+
+void PipelineRunner::finishReport() {
   report_.captured = captured_;
   report_.published = published_;
   report_.fps = report_.wall_s > 0 ? static_cast<double>(report_.published) / report_.wall_s : 0;
-  return s;
+  const std::vector<std::string>& names = timings_.names();
+  for (std::size_t i = 0; i < names.size(); ++i)
+    report_.stages.push_back({names[i], timings_.stage(i).summary()});
+  report_.end_to_end = timings_.endToEnd().summary();
+  for (const EdgeReport& e : report_.edges) report_.dropped += e.drops;
 }
 
 Status PipelineRunner::runSequential(std::vector<std::unique_ptr<FrameSlot>>& slots,
                                      PipelineControl& control,
                                      const std::function<void()>& tick) {
-  LatencyRecorder rec_capture, rec_stereo, rec_estimate, rec_publish, rec_e2e;
   FrameSlot& slot = *slots.front();
-  Pacer pacer(options_.rate_hz);
-  std::int64_t k = 0;
+  Capture capture(graph_.source, options_.rate_hz, control, captured_);
+  if (graph_.on_thread_start) graph_.on_thread_start("pipeline");
   Status error;
-  work_.onThreadStart("pipeline");
-  while (!control.stop.load()) {
+  while (!control.stop.load() && error) {
     if (tick) tick();
-    if (control.pause.load()) {
-      const std::int64_t p0 = steadyNowNs();
-      std::this_thread::sleep_for(milliseconds(10));
-      pacer.paused(steadyNowNs() - p0);
-      continue;
-    }
-    std::int64_t start = steadyNowNs();
-    if (pacer.active()) {
-      const std::int64_t due = pacer.due(k);
-      sleepUntil(due, control);
-      if (control.stop.load()) break;
-      start = due;
-    }
-    slot.stamps = FrameStamps{};
-    slot.stamps.capture_ns = start;
-    const std::int64_t c0 = steadyNowNs();
-    auto more = work_.capture(slot);
+    if (capture.paused()) continue;
+    auto more = capture.read(slot);
     if (!more) {
       error = more.status();
       break;
     }
     if (!*more) break;
-    slot.stamps.captured_ns = steadyNowNs();
-    if (!pacer.active()) slot.stamps.capture_ns = slot.stamps.captured_ns;
-    rec_capture.add(slot.stamps.captured_ns - c0);
-    slot.seq = k++;
-    slot.failed = false;
-    captured_.fetch_add(1, std::memory_order_relaxed);
-    auto timed = [&](std::int64_t& a, std::int64_t& b, LatencyRecorder& rec, auto&& fn) {
-      a = steadyNowNs();
-      Status st = fn();
-      b = steadyNowNs();
-      rec.add(b - a);
-      return st;
-    };
-    FrameStamps& st = slot.stamps;
-    if (Status e = timed(st.stereo_start_ns, st.stereo_end_ns, rec_stereo,
-                         [&] { return work_.stereo(slot); });
-        !e) {
-      error = e;
-      break;
+    for (std::size_t i = 0; i < graph_.stages.size() && error; ++i) {
+      slot.stamps.start_ns[i] = steadyNowNs();
+      error = graph_.stages[i].work(slot);
+      slot.stamps.end_ns[i] = steadyNowNs();
     }
-    if (Status e = timed(st.estimate_start_ns, st.estimate_end_ns, rec_estimate,
-                         [&] { return work_.estimate(slot); });
-        !e) {
-      error = e;
-      break;
-    }
-    if (Status e = timed(st.publish_start_ns, st.published_ns, rec_publish,
-                         [&] { return work_.publish(slot); });
-        !e) {
-      error = e;
-      break;
-    }
-    rec_e2e.add(st.published_ns - st.capture_ns);
+    if (!error) break;
+    timings_.record(slot);
     published_.fetch_add(1, std::memory_order_relaxed);
   }
   if (tick) tick();
-  report_.error = error;
-  report_.capture = rec_capture.summary();
-  report_.stereo = rec_stereo.summary();
-  report_.estimate = rec_estimate.summary();
-  report_.publish = rec_publish.summary();
-  report_.end_to_end = rec_e2e.summary();
   return error;
 }
 
 Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slots,
                                    PipelineControl& control, const std::function<void()>& tick,
                                    int tick_ms) {
-  const int qcap = options_.queue_capacity;
+  const std::size_t n = graph_.stages.size();
   BlockingEdge<FrameSlot> free_slots(slots.size() + 1);
   for (auto& s : slots) free_slots.push(s.get());
-  NewestEdge<FrameSlot> capture_newest;
-  BlockingEdge<FrameSlot> capture_fifo(static_cast<std::size_t>(qcap));
-  BlockingEdge<FrameSlot> to_estimator(static_cast<std::size_t>(qcap));
-  BlockingEdge<FrameSlot> to_publisher(static_cast<std::size_t>(qcap));
-  LatencyRecorder rec_capture, rec_stereo, rec_estimate, rec_publish, rec_e2e;
+  std::vector<std::unique_ptr<StageEdge>> edges;  // edges[i]: into stages[i]
+  for (const StageSpec& s : graph_.stages)
+    edges.push_back(std::make_unique<StageEdge>(s.input, options_.queue_capacity));
   std::mutex error_mutex;
   Status first_error;
   std::atomic<std::int64_t> failed{0};
-  std::atomic<int> running{4};
+  std::atomic<int> running{static_cast<int>(n) + 1};
   auto fail = [&](const Status& s) {
     std::lock_guard<std::mutex> lock(error_mutex);
     if (first_error) first_error = s;
     control.stop = true;
   };
+  auto threadStart = [&](const std::string& name) {
+    if (graph_.on_thread_start) graph_.on_thread_start(name);
+  };
 
-  std::thread capture([&] {
-    work_.onThreadStart("capture");
-    std::vector<FrameSlot*> stash;  // slots handed back by the newest-frame edge
+  std::vector<std::thread> threads;
+  threads.emplace_back([&] {
+    threadStart(graph_.source.name);
+    Capture capture(graph_.source, options_.rate_hz, control, captured_);
+    std::vector<FrameSlot*> stash;  // slots handed back by a newest-frame edge
     stash.reserve(2);
-    Pacer pacer(options_.rate_hz);
-    std::int64_t k = 0;
     while (!control.stop.load()) {
-      if (control.pause.load()) {
-        const std::int64_t p0 = steadyNowNs();
-        std::this_thread::sleep_for(milliseconds(10));
-        pacer.paused(steadyNowNs() - p0);
-        continue;
-      }
+      if (capture.paused()) continue;
       FrameSlot* slot = nullptr;
       if (!stash.empty()) {
         slot = stash.back();
@@ -212,114 +272,58 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
       }
       while (!slot && !control.stop.load()) (void)free_slots.pop(slot, kPollTimeout);
       if (!slot) break;
-      std::int64_t start = steadyNowNs();
-      if (pacer.active()) {
-        const std::int64_t due = pacer.due(k);
-        sleepUntil(due, control);
-        start = due;
-      }
-      if (control.stop.load()) {
-        stash.push_back(slot);
-        break;
-      }
-      slot->stamps = FrameStamps{};
-      slot->stamps.capture_ns = start;
-      const std::int64_t c0 = steadyNowNs();
-      auto more = work_.capture(*slot);
+      auto more = capture.read(*slot);
       if (!more || !*more) {
         if (!more) fail(more.status());
-        stash.push_back(slot);
-        break;
+        break;  // the slot stays out of the pool: the run is over
       }
-      slot->stamps.captured_ns = steadyNowNs();
-      if (!pacer.active()) slot->stamps.capture_ns = slot->stamps.captured_ns;
-      rec_capture.add(slot->stamps.captured_ns - c0);
-      slot->seq = k++;
-      slot->failed = false;
-      captured_.fetch_add(1, std::memory_order_relaxed);
-      if (options_.keep_newest) {
-        if (FrameSlot* old = capture_newest.push(slot)) stash.push_back(old);
-      } else {
-        capture_fifo.push(slot);
-      }
+      if (FrameSlot* old = edges[0]->push(slot)) stash.push_back(old);
     }
-    if (options_.keep_newest)
-      capture_newest.close();
-    else
-      capture_fifo.close();
+    edges[0]->close();
     running.fetch_sub(1);
   });
 
-  // A processing stage: takes slots from `in` until closed, runs `fn` on those not failed,
-  // forwards every slot to `out`.
-  auto stage = [&](const char* name, auto pop, BlockingEdge<FrameSlot>& out, auto fn,
-                   LatencyRecorder& rec, std::int64_t FrameStamps::*a, std::int64_t FrameStamps::*b) {
-    work_.onThreadStart(name);
-    // Frames ahead of a failure (already past this stage) are still published; after this
-    // stage fails, every later frame is skipped here and downstream.
-    bool this_stage_failed = false;
-    for (;;) {
-      FrameSlot* slot = nullptr;
-      if (!pop(slot)) continue;
-      if (!slot) break;
-      if (this_stage_failed) slot->failed = true;
-      if (!slot->failed) {
-        slot->stamps.*a = steadyNowNs();
-        Status s = fn(*slot);
-        slot->stamps.*b = steadyNowNs();
-        rec.add(slot->stamps.*b - slot->stamps.*a);
-        if (!s) {
-          slot->failed = true;
-          this_stage_failed = true;
-          fail(s);
+  // Stage i: takes slots from edges[i] until closed, runs its work on those not failed, forwards
+  // every slot to edges[i + 1] (the sink: records and counts it, then returns it to the pool).
+  // Frames ahead of a failure (already past this stage) are still published; after this stage
+  // fails, every later frame is skipped here and downstream.
+  for (std::size_t i = 0; i < n; ++i) {
+    threads.emplace_back([&, i] {
+      const StageSpec& stage = graph_.stages[i];
+      const bool sink = i + 1 == n;
+      threadStart(stage.name);
+      bool this_stage_failed = false;
+      for (;;) {
+        FrameSlot* slot = nullptr;
+        if (!edges[i]->pop(slot)) continue;
+        if (!slot) break;
+        if (this_stage_failed) slot->failed = true;
+        if (!slot->failed) {
+          slot->stamps.start_ns[i] = steadyNowNs();
+          const Status s = stage.work(*slot);
+          slot->stamps.end_ns[i] = steadyNowNs();
+          if (!s) {
+            slot->failed = true;
+            this_stage_failed = true;
+            fail(s);
+          }
         }
-      }
-      out.push(slot);
-    }
-    out.close();
-    running.fetch_sub(1);
-  };
-  std::thread stereo([&] {
-    auto pop = [&](FrameSlot*& s) {
-      return options_.keep_newest ? capture_newest.pop(s, kPollTimeout)
-                                  : capture_fifo.pop(s, kPollTimeout);
-    };
-    stage("stereo", pop, to_estimator, [&](FrameSlot& s) { return work_.stereo(s); }, rec_stereo,
-          &FrameStamps::stereo_start_ns, &FrameStamps::stereo_end_ns);
-  });
-  std::thread estimator([&] {
-    auto pop = [&](FrameSlot*& s) { return to_estimator.pop(s, kPollTimeout); };
-    stage("estimator", pop, to_publisher, [&](FrameSlot& s) { return work_.estimate(s); },
-          rec_estimate, &FrameStamps::estimate_start_ns, &FrameStamps::estimate_end_ns);
-  });
-  std::thread publisher([&] {
-    work_.onThreadStart("publisher");
-    bool publish_failed = false;
-    for (;;) {
-      FrameSlot* slot = nullptr;
-      if (!to_publisher.pop(slot, kPollTimeout)) continue;
-      if (!slot) break;
-      if (publish_failed) slot->failed = true;
-      if (!slot->failed) {
-        slot->stamps.publish_start_ns = steadyNowNs();
-        Status s = work_.publish(*slot);
-        slot->stamps.published_ns = steadyNowNs();
-        rec_publish.add(slot->stamps.published_ns - slot->stamps.publish_start_ns);
-        if (!s) {
-          publish_failed = true;
-          fail(s);
+        if (!sink) {
+          edges[i + 1]->push(slot);
+          continue;
+        }
+        if (slot->failed) {
           failed.fetch_add(1);
         } else {
-          rec_e2e.add(slot->stamps.published_ns - slot->stamps.capture_ns);
+          timings_.record(*slot);
           published_.fetch_add(1, std::memory_order_relaxed);
         }
-      } else {
-        failed.fetch_add(1);
+        free_slots.push(slot);
       }
-      free_slots.push(slot);
-    }
-    running.fetch_sub(1);
-  });
+      if (!sink) edges[i + 1]->close();
+      running.fetch_sub(1);
+    });
+  }
 
   std::int64_t next_tick = steadyNowNs();
   while (running.load() > 0) {
@@ -329,32 +333,14 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
     }
     std::this_thread::sleep_for(milliseconds(std::min(tick_ms, 10)));
   }
-  capture.join();
-  stereo.join();
-  estimator.join();
-  publisher.join();
+  for (std::thread& t : threads) t.join();
   if (tick) tick();
-
-  report_.error = first_error;
   report_.failed = failed.load();
-  report_.capture = rec_capture.summary();
-  report_.stereo = rec_stereo.summary();
-  report_.estimate = rec_estimate.summary();
-  report_.publish = rec_publish.summary();
-  report_.end_to_end = rec_e2e.summary();
-  EdgeReport cap{"capture->stereo", 0, 0, 0, 0};
-  if (options_.keep_newest) {
-    cap.capacity = capture_newest.capacity();
-    cap.max_depth = capture_newest.maxDepth();
-    cap.drops = capture_newest.drops();
-  } else {
-    cap.capacity = capture_fifo.capacity();
-    cap.max_depth = capture_fifo.maxDepth();
+  std::string from = graph_.source.name;
+  for (std::size_t i = 0; i < n; ++i) {
+    report_.edges.push_back(edges[i]->report(from + "->" + graph_.stages[i].name));
+    from = graph_.stages[i].name;
   }
-  report_.dropped = cap.drops;
-  report_.edges = {cap,
-                   {"stereo->estimator", to_estimator.capacity(), to_estimator.maxDepth(), 0, 0},
-                   {"estimator->publisher", to_publisher.capacity(), to_publisher.maxDepth(), 0, 0}};
   return first_error;
 }
 

@@ -1,18 +1,12 @@
 #pragma once
-// The real-time pipeline: one thread per stage,
-//   capture -> stereo -> estimator -> publisher
-// connected by bounded lock-free SPSC edges (realtime/edges.hpp) that carry pointers to pooled
-// frame slots; the publisher returns each slot to capture through a free-slot ring.
-//  - capture -> stereo: NewestEdge (keep the newest, count every drop) for cameras and paced
-//    replays (options.keep_newest), else BlockingEdge (back-pressure, no drop);
-//  - stereo -> estimator -> publisher: BlockingEdge of options.queue_capacity.
-// The estimator stage holds the temporal matching, the VME and the EKF: the VME of frame k uses
-// the non-landmark matches, which depend on the EKF's landmarks of frame k-1, and the temporal
-// search of frame k is predicted with the motion of frame k-1, so these steps form one chain per
-// frame and run on one thread; the stereo stage (dense stereo, detection, stereo matching) has
-// no frame-to-frame state and runs ahead on its own thread.
-// options.sequential runs the same work on the calling thread, one frame after the other: the
-// outputs are the same byte for byte (nothing drops in either mode without keep_newest).
+// The real-time pipeline: runs a StageGraph (realtime/stage_graph.hpp) with one thread per
+// stage, connected by bounded lock-free SPSC edges (realtime/edges.hpp) that carry pointers to
+// pooled frame slots; after the last stage each slot returns to the source through a free-slot
+// ring. options.sequential runs the same graph on the calling thread, one frame after the
+// other: the outputs are the same byte for byte (nothing drops in either mode without a
+// kNewest edge). Both modes share the capture (pacing, pause, stamps) and the timing: every
+// stage's duration and the end-to-end latency (capture instant -> sink done) are recorded from
+// the slot's stamps once the sink is done, on the sink's thread.
 // Stop: PipelineControl::stop (signal, command, error) stops capture; the frames in flight are
 // drained through every stage, then run() returns.
 #include <atomic>
@@ -25,29 +19,14 @@
 #include "core/status.hpp"
 #include "pipeline/realtime/frame_slot.hpp"
 #include "pipeline/realtime/latency_stats.hpp"
+#include "pipeline/realtime/stage_graph.hpp"
 
 namespace svslam::rt {
 
-// The work of each stage, independent of threading. Each method is called from one thread only
-// (its stage's), on a slot no other stage holds at that time.
-class PipelineWork {
- public:
-  virtual ~PipelineWork() = default;
-  // Reads the next pair into `slot` (frame, seq, ground truth); false at the end of the stream.
-  virtual Result<bool> capture(FrameSlot& slot) = 0;
-  virtual Status stereo(FrameSlot& slot) = 0;
-  virtual Status estimate(FrameSlot& slot) = 0;
-  // Writes / sends the pose of a slot whose stages all succeeded.
-  virtual Status publish(FrameSlot& slot) = 0;
-  // Called on the stage's own thread before its first frame (thread name, affinity, priority).
-  virtual void onThreadStart(const char* stage) { (void)stage; }
-};
-
 struct PipelineOptions {
-  bool sequential = false;   // run every stage on the calling thread
-  double rate_hz = 0.0;      // pace capture at this rate (replays); 0 = as fast as possible
-  bool keep_newest = false;  // capture edge keeps the newest frame and counts drops
-  int queue_capacity = 2;    // slots per blocking edge, >= 1
+  bool sequential = false;  // run every stage on the calling thread
+  double rate_hz = 0.0;     // pace capture at this rate (replays); 0 = as fast as possible
+  int queue_capacity = 2;   // slots per blocking edge, >= 1
   Status validate() const;
 };
 
@@ -63,22 +42,48 @@ struct EdgeReport {
   std::int64_t drops = 0;
 };
 
+struct StageReport {
+  std::string name;
+  LatencySummary latency;  // the stage's work per frame
+};
+
+// Per-stage and end-to-end latency recorders, written on the sink's thread only.
+class StageTimings {
+ public:
+  explicit StageTimings(const StageGraph& graph);
+  // Records a frame the sink has finished.
+  void record(const FrameSlot& slot);
+  // index 0: the source; 1..n: stages[0..n-1].
+  const std::vector<std::string>& names() const { return names_; }
+  const LatencyRecorder& stage(std::size_t index) const { return per_stage_[index]; }
+  const LatencyRecorder& endToEnd() const { return e2e_; }
+  void clear();
+
+ private:
+  std::vector<std::string> names_;
+  std::vector<LatencyRecorder> per_stage_;
+  LatencyRecorder e2e_;
+};
+
 struct PipelineReport {
   std::int64_t captured = 0, published = 0, dropped = 0, failed = 0;
-  Status error;  // first stage error (the run stopped there)
-  LatencySummary capture, stereo, estimate, publish;  // stage durations
-  LatencySummary end_to_end;                          // capture instant -> pose published
+  Status error;                     // first stage error (the run stopped there)
+  std::vector<StageReport> stages;  // the source, then each stage, in order
+  LatencySummary end_to_end;        // capture instant -> pose published
   std::vector<EdgeReport> edges;
   double wall_s = 0.0;
   double fps = 0.0;  // published / wall time
+  // The stage called `name` (an empty summary when there is none).
+  LatencySummary stage(const std::string& name) const;
 };
 
 class PipelineRunner {
  public:
-  PipelineRunner(const PipelineOptions& options, PipelineWork& work);
+  PipelineRunner(const PipelineOptions& options, StageGraph graph);
   ~PipelineRunner();
-  // Slots the pool needs for the options (threaded: every edge full plus one per stage).
-  static int slotsNeeded(const PipelineOptions& options);
+  // Slots the pool needs (threaded: every edge full plus one per stage and a spare).
+  static int slotsNeeded(const PipelineOptions& options, const StageGraph& graph);
+  int slotsNeeded() const { return slotsNeeded(options_, graph_); }
   // Runs until the end of the stream, a stage error or control.stop. `slots` (slotsNeeded of
   // them, preallocated by the caller) are the whole frame memory. `tick` is called about every
   // tick_ms (threaded: from the calling thread while the stages run; sequential: between frames)
@@ -88,18 +93,22 @@ class PipelineRunner {
   // Progress, readable from any thread while run() runs.
   std::int64_t published() const { return published_.load(std::memory_order_relaxed); }
   std::int64_t captured() const { return captured_.load(std::memory_order_relaxed); }
+  // The latencies so far: read from the sink stage's work (its thread) or after run().
+  const StageTimings& timings() const { return timings_; }
   // After run().
   const PipelineReport& report() const { return report_; }
 
  private:
-  struct Impl;
+  class Capture;
   Status runSequential(std::vector<std::unique_ptr<FrameSlot>>& slots, PipelineControl& control,
                        const std::function<void()>& tick);
   Status runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slots, PipelineControl& control,
                      const std::function<void()>& tick, int tick_ms);
+  void finishReport();
 
   PipelineOptions options_;
-  PipelineWork& work_;
+  StageGraph graph_;
+  StageTimings timings_;
   std::atomic<std::int64_t> published_{0}, captured_{0};
   PipelineReport report_;
 };

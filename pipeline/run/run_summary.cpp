@@ -8,9 +8,9 @@ namespace svslam::run {
 
 using cli::JsonObject;
 
-void RunSummary::add(int frame, const SlamFrameResult& sr, bool ekf_mode) {
+void RunSummary::add(int frame, const SlamFrameResult& sr) {
   const OdometryFrameResult& r = sr.odometry;
-  if (ekf_mode) {
+  {  // landmark counts (zero for an estimator without a map)
     sum_observed += sr.observed;
     sum_reperceived += sr.reperceived;
     sum_gated += sr.gated;
@@ -103,10 +103,10 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
       .add("frames_dropped", static_cast<std::int64_t>(pipeline.dropped))
       .add("wall_s", pipeline.wall_s, 3)
       .add("fps", pipeline.fps, 2)
-      .addRaw("capture", latency(pipeline.capture))
-      .addRaw("stereo", latency(pipeline.stereo))
-      .addRaw("estimator", latency(pipeline.estimate))
-      .addRaw("publisher", latency(pipeline.publish))
+      .addRaw("capture", latency(pipeline.stage("capture")))
+      .addRaw("stereo", latency(pipeline.stage("stereo")))
+      .addRaw("estimator", latency(pipeline.stage("estimator")))
+      .addRaw("publisher", latency(pipeline.stage("publisher")))
       .addRaw("end_to_end", latency(pipeline.end_to_end));
   std::string queues = "[";
   for (std::size_t i = 0; i < pipeline.edges.size(); ++i) {

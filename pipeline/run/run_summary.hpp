@@ -8,7 +8,7 @@
 #include "pipeline/config/run_config.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
 #include "pipeline/run/run_outputs.hpp"
-#include "slam/slam_system.hpp"
+#include "slam/estimator.hpp"
 
 namespace svslam::run {
 
@@ -19,13 +19,13 @@ struct RunSummary {
   std::vector<std::pair<int, std::string>> failures;  // the first ones: frame + reason
   double sum_corners = 0, sum_points = 0, sum_matches = 0, sum_inliers = 0;
   double sum_recovered = 0, sum_continuity_rejected = 0;
-  // EKF mode.
+  // Landmark map (ekf mode; zero otherwise).
   double sum_observed = 0, sum_reperceived = 0, sum_gated = 0, sum_in_state = 0;
   double sum_visible = 0, sum_no_match = 0, sum_no_stereo = 0;
   int max_in_state = 0, landmarks_in_map = 0, added = 0, retired = 0, restored = 0;
 
   // Adds one processed frame (source index `frame`).
-  void add(int frame, const SlamFrameResult& r, bool ekf_mode);
+  void add(int frame, const SlamFrameResult& r);
 };
 
 // stats.json: the run's configuration summary, the per-frame means, the per-stage times

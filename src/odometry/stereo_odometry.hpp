@@ -1,24 +1,20 @@
 #pragma once
-// Stereo visual odometry: the front end and visual motion estimation of seed 001 (sec. 2, 3.2,
-// 3.3, 4.1) chained frame to frame.
+// Stereo visual odometry: the tracking half of the front end and the visual motion estimation
+// of seed 001 (sec. 3.3, 4.1) chained frame to frame, on the output of the stereo stage
+// (odometry/stereo_stage.hpp: dense stereo, points, stereo matching, 3D points, ROIs).
 //
-// Per frame (rectified pair):
-//  1. optional dense stereo (census, stereo/dense_stereo.hpp): a disparity prior for the point
-//     matcher and, per matched point, the 8-neighbour observation (reprojection.hpp);
-//  2. interest points in the left image (precise Harris or Shi-Tomasi with grid bucketing, or
-//     the improved ORB of seed 002: their positions go to the same ZNCC matching);
-//  3. stereo matching of the points (features/stereo_point_matcher.hpp) -> 3D points with
-//     covariance: from the dense neighbourhood when dense is on, otherwise from the
-//     triangulation Jacobian with sigma_d and the image-plane matching error match_sigma_px;
-//  4. temporal matching against the previous frame's points, around the position predicted
-//     with the previous motion (constant velocity); on too few matches, retried with the
-//     identity prediction and lost_search_radius_px. Before any motion has been measured (the
-//     first pair, or after resetTracking) the identity is searched with lost_search_radius_px
+// Per frame:
+//  1. temporal matching of the stage's points against the previous frame's, around the
+//     position predicted with the previous motion (constant velocity), each previous point
+//     inside its ROI when the stage applied ROIs; on too few matches, retried with the identity
+//     prediction and lost_search_radius_px. Before any motion has been measured (the first
+//     pair, or after resetTracking) the identity is searched with lost_search_radius_px
 //     straight away;
-//  5. visual motion estimation (motion/visual_motion.hpp) -> T_cur_prev and its covariance.
+//  2. visual motion estimation (motion/visual_motion.hpp) -> T_cur_prev and its covariance.
 // Poses: T_first_cam = T_first_prev * T_cur_prev^-1 (left camera in the first left camera's
 // frame, x right, y down, z forward). A frame whose motion cannot be estimated keeps the
 // predicted motion and is reported as not tracked; the next frame continues from it.
+// feedback() is what the stereo stage of the next frame needs (ROI tracking).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <memory>
@@ -30,8 +26,6 @@
 #include "core/image.hpp"
 #include "core/stage_observer.hpp"
 #include "core/status.hpp"
-#include "features/feature_clusters.hpp"
-#include "features/stereo_point_matcher.hpp"
 #include "features/temporal_matcher.hpp"
 #include "motion/visual_motion.hpp"
 #include "odometry/odometry_params.hpp"
@@ -65,27 +59,24 @@ class StereoOdometry {
   ~StereoOdometry();
   const Status& initStatus() const { return init_status_; }
 
-  // Processes the next rectified pair (calibration size): frontEnd() then estimateMotion()
-  // with every match. `observer`, when given, hears "dense_stereo" (if enabled), "detect",
-  // "stereo_match", "temporal_match", "motion".
-  Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                 OdometryFrameResult& out, Executor& executor, StageObserver* observer = nullptr);
+  // frontEnd() then estimateMotion() with every match. `observer` hears "temporal_match" and
+  // "motion".
+  Status process(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,
+                 OdometryFrameResult& out, StageObserver* observer = nullptr);
 
   // The two halves of process(), for a caller (the SLAM filter) that needs to look at the
-  // matches before the motion is estimated. frontEnd() fills points() and matches();
-  // estimateMotion() uses the matches whose `exclude[k]` is 0 (all when `exclude` is null) and
-  // updates the pose; the frame becomes the previous one at the next frontEnd().
-  Status frontEnd(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                  OdometryFrameResult& out, Executor& executor, StageObserver* observer = nullptr);
-  // frontEnd() with the stereo stage already run on this pair by the caller (a pipeline
-  // thread ahead of this one) through a StereoStage built from the same parameters: `stereo`
-  // must stay alive and unchanged until the next frontEnd(). In ROI mode (stereo.matched
-  // false) detection and matching are done here. Same results as frontEnd(left, right, ...).
-  Status frontEnd(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                  const StereoStageOutput& stereo, OdometryFrameResult& out, Executor& executor,
-                  StageObserver* observer = nullptr);
+  // matches before the motion is estimated. frontEnd() takes the left image of the pair and the
+  // stereo stage's output for it (from a StereoStage built with the same parameters, fed with
+  // this object's feedback(); `stereo` must stay alive and unchanged until the next
+  // frontEnd()), and fills points() and matches(); estimateMotion() uses the matches whose
+  // `exclude[k]` is 0 (all when `exclude` is null) and updates the pose; the frame becomes the
+  // previous one at the next frontEnd().
+  Status frontEnd(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,
+                  OdometryFrameResult& out, StageObserver* observer = nullptr);
   Status estimateMotion(const std::vector<std::uint8_t>* exclude, OdometryFrameResult& out,
                         StageObserver* observer = nullptr);
+  // What the stereo stage of the next frame needs (after estimateMotion()).
+  TrackingFeedback feedback() const;
   // After frontEnd() (until the next one): this frame's points, the previous frame's points,
   // and the temporal matches between them (indices into previousPoints() and points()).
   const std::vector<TrackPoint>& points() const { return cur_; }
@@ -98,37 +89,19 @@ class StereoOdometry {
   // triangulation Jacobian with sigma_uv = matching_error_px. False when not observable.
   bool observe(const TrackPoint& p, double matching_error_px, StereoPoint& out) const;
   const StereoCalibration& calibration() const { return calib_; }
-  const DisparityResult* denseDisparity() const {
-    return disp_;
-  }
+  const DisparityResult* denseDisparity() const { return disp_; }
 
   // Forgets the previous frame: the next frame starts a new segment at the current pose.
   void resetTracking();
 
  private:
-  void buildPoints();  // cur_ from in_->stereo
-  // ROI tracking: filters corner_px_ and fills ranges_ / regions_ from the previous clusters.
-  void applyRois(OdometryFrameResult& out);
-
   StereoOdometryParams params_;
   StereoCalibration calib_;
   Status init_status_;
-  StereoStage stage_;            // this object's own stereo stage
-  StereoStageOutput own_;        // its output (whole frame, or ROI-mode detection + matching)
-  const StereoStageOutput* in_ = nullptr;  // the current frame's stereo matches (own_ or the
-                                           // caller's), valid until the next frontEnd()
   const DisparityResult* disp_ = nullptr;  // the current frame's dense disparity, if any
   TemporalMatcher temporal_matcher_;
   VisualMotion motion_;
   VisualMotionResult motion_result_;  // reused every frame (its inlier flags keep capacity)
-  std::unique_ptr<FeatureClusters> clusterer_;
-  std::vector<Cluster> prev_clusters_, cur_clusters_;
-  RoiSet roi_;
-  std::vector<Eigen::Vector2i> ranges_;
-  std::vector<Eigen::Vector4i> regions_;
-  std::vector<Eigen::Vector3d> cluster_pts_;
-  std::vector<float> cluster_quality_;
-  bool have_rois_ = false;
   std::vector<TrackPoint> prev_, cur_;
   std::vector<TemporalMatch> matches_;
   std::vector<PointPair> pairs_;

@@ -1,17 +1,27 @@
 #pragma once
-// The per-frame stereo stage of the odometry: what can be computed from one rectified pair
-// alone, with no state carried between frames, so that a pipeline can run it on its own thread
-// ahead of the tracking (seed 001 sec. 3.1 and 3.2):
+// The per-frame stereo stage of the front end: everything computed from one rectified pair,
+// so that a pipeline runs it on its own thread ahead of the estimator (seed 001 sec. 3.1, 3.2):
 //  1. optional dense census stereo (the disparity prior and the 8-neighbour observation);
 //  2. interest points in the left image (precise Harris / Shi-Tomasi with grid bucketing, or
 //     the ORB of seed 002);
-//  3. stereo matching of the points along the row (ZNCC, ratio, continuity, recovery).
-// With clustered-feature ROI tracking (seed 004), steps 2-3 depend on the previous frame's
-// clusters: process() then stops after step 1 (`matched` stays false) and the odometry runs
-// detect() and match() itself with its ROIs.
-// Two StereoStage objects built from the same parameters give identical outputs for the same
-// pair (the threaded pipeline's stage and the odometry's own one), whatever the executor.
+//  3. with clustered-feature ROI tracking (seed 004 sec 3.6): the previous frame's clusters of
+//     3D points, moved by the estimator's predicted motion (TrackingFeedback), give left ROIs
+//     (where corners are kept, and where each previous point is searched by the temporal
+//     matcher) and right ROIs (which bound the disparity search); image cells outside every ROI
+//     are unknown and keep corners down to threshold_rel * unknown_threshold_factor;
+//  4. stereo matching of the points along the row (ZNCC, ratio, continuity, recovery);
+//  5. 3D points with covariance (TrackPoint): from the dense 8-neighbourhood when dense is on,
+//     otherwise from the triangulation Jacobian with sigma_d and match_sigma_px; points with a
+//     disparity below min_disparity_px or farther than max_depth_m are left out;
+//  6. with ROI tracking: clusters of these points, for the next frame's ROIs.
+// Steps 1-2 need the pair alone; steps 3-6 need the estimator's feedback on the previous frame
+// when ROI tracking is on (needsFeedback()), so a pipeline calls prepare() then, once that
+// feedback is there, finish(). process() does both.
+// The stage's state between frames is the previous frame's clusters and point count (ROI
+// tracking only); a stage built from the same parameters gives the same output for the same
+// sequence of pairs and feedbacks, whatever the executor.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <memory>
 #include <vector>
 
@@ -24,44 +34,73 @@
 
 namespace svslam {
 
+// What the estimator tells the stereo stage about the frame it has just processed, for the
+// next frame's ROIs (used only with roi_tracking).
+struct TrackingFeedback {
+  bool has_previous = false;  // the next frame will be matched against the last one
+  // The last frame's motion (left camera, current <- previous): the constant-velocity
+  // prediction of the next one.
+  Eigen::Isometry3d T_cur_prev = Eigen::Isometry3d::Identity();
+};
+
 // The product of the stereo stage for one pair. Buffers are reused from frame to frame.
 struct StereoStageOutput {
   bool has_disparity = false;  // dense stereo ran (params.dense)
   DisparityResult disparity;   // left-image disparity and sigma_d, px
-  bool matched = false;        // steps 2-3 ran (false in ROI mode: left to the odometry)
-  std::vector<Eigen::Vector2f> corner_px;  // detected points, left image, px
+  bool finished = false;       // steps 3-6 ran
+  std::vector<Eigen::Vector2f> corner_px;  // detected points (after the ROI filter), left, px
   std::vector<float> corner_resp;          // their detector responses
   float max_response = 0.0f;               // strongest corner response of the image (Harris)
   std::vector<StereoMatch> stereo;         // stereo matches of the points
   StereoMatchStats stereo_stats;
+  std::vector<TrackPoint> points;          // step 5, left camera frame
+  // ROI tracking (step 3).
+  bool has_rois = false;    // ROIs were applied to this frame
+  int rois = 0;             // cluster regions used
+  int roi_dropped = 0;      // corners outside every ROI and not in an unknown cell
+  int unknown_corners = 0;  // corners kept in unknown cells
+  // One per point of the previous frame (has_rois): the left ROI [x0, y0, x1) x [y0, y1) px
+  // its temporal match is searched in; all zero = no restriction.
+  std::vector<Eigen::Vector4i> prev_regions;
   // Clears the per-frame content, keeping the capacity.
   void clear();
 };
 
 class StereoStage {
  public:
-  // `params` are the odometry's; the stage uses detector, corners (at the lowered ROI threshold
-  // when roi_tracking), orb, stereo_match, dense and dense_stereo. Preallocates for the size.
+  // `params` are the front end's: detector, corners, orb, stereo_match, dense, dense_stereo,
+  // roi_tracking, clusters, unknown_threshold_factor, match_sigma_px, min_disparity_px,
+  // max_depth_m. Preallocates for the calibration's image size.
   StereoStage(const StereoOdometryParams& params, const StereoCalibration& calib);
   ~StereoStage();
   StereoStage(const StereoStage&) = delete;
   StereoStage& operator=(const StereoStage&) = delete;
   const Status& initStatus() const { return init_status_; }
 
-  // Steps 1-3 (steps 2-3 skipped in ROI mode). `observer` hears "dense_stereo" (when enabled),
-  // "detect" and "stereo_match". Images of the calibration size.
-  Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+  // Whether finish() reads the feedback (ROI tracking).
+  bool needsFeedback() const { return params_.roi_tracking; }
+
+  // Steps 1-2 on a pair of the calibration size. `observer` hears "dense_stereo" (when
+  // enabled) and "detect".
+  Status prepare(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                  StereoStageOutput& out, Executor& executor, StageObserver* observer = nullptr);
-  // Step 2 alone: fills corner_px, corner_resp, max_response. The corner filtering runs over
-  // row stripes on `executor` (same corners for any executor).
-  Status detect(ImageView<const std::uint8_t> left, StereoStageOutput& out, Executor& executor);
-  // Step 3 alone over out.corner_px; `prior` is the dense disparity (empty view: none) and
-  // `ranges` (optional, one per point) bound the disparity search (ROI tracking).
-  Status match(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-               ImageView<const float> prior, const std::vector<Eigen::Vector2i>* ranges,
-               StereoStageOutput& out);
+  // Steps 3-6 on the pair given to prepare(), with the estimator's feedback on the previous
+  // frame. `observer` hears "stereo_match".
+  Status finish(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                const TrackingFeedback& feedback, StereoStageOutput& out,
+                StageObserver* observer = nullptr);
+  // prepare() then finish().
+  Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                 const TrackingFeedback& feedback, StereoStageOutput& out, Executor& executor,
+                 StageObserver* observer = nullptr);
 
  private:
+  // Step 3: filters out.corner_px by the ROIs of the previous clusters moved by T_cur_prev;
+  // fills ranges_ and out.prev_regions.
+  void applyRois(const Eigen::Isometry3d& T_cur_prev, StereoStageOutput& out);
+  void buildPoints(StereoStageOutput& out) const;  // step 5
+  Status clusterPoints(const StereoStageOutput& out);  // step 6
+
   StereoOdometryParams params_;
   StereoCalibration calib_;
   Status init_status_;
@@ -73,6 +112,14 @@ class StereoStage {
   StereoPointMatcher stereo_matcher_;
   std::unique_ptr<DenseStereo> dense_;
   std::size_t max_points_ = 0;  // bound of the points detected per frame
+  // ROI tracking.
+  std::unique_ptr<FeatureClusters> clusterer_;
+  std::vector<Cluster> prev_clusters_, cur_clusters_;
+  std::size_t prev_points_ = 0;  // points of the previous frame
+  RoiSet roi_;
+  std::vector<Eigen::Vector2i> ranges_;
+  std::vector<Eigen::Vector3d> cluster_pts_;
+  std::vector<float> cluster_quality_;
 };
 
 }  // namespace svslam

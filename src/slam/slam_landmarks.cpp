@@ -194,7 +194,7 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     // Right image: along the row around the predicted disparity.
     const double dr = 3.0 * pr.sigma_d + 3.0;
     StereoMatch sm;
-    if (!stereo_.matchPoint(left, right, bx, by, static_cast<int>(std::floor(pr.d - dr)),
+    if (!landmark_row_matcher_.matchPoint(left, right, bx, by, static_cast<int>(std::floor(pr.d - dr)),
                             static_cast<int>(std::ceil(pr.d + dr)), sm)) {
       ++out.search_no_stereo;
       continue;

@@ -46,11 +46,11 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
       vo_(odometry, calib),
       ekf_(params.ekf),
       landmarks_(params.patch_half_px, params.map_reserve),
-      stereo_(odometry.stereo_match) {
+      landmark_row_matcher_(odometry.stereo_match) {
   init_status_ = params.validate();
   if (init_status_) init_status_ = vo_.initStatus();
   if (init_status_) init_status_ = ekf_.initStatus();
-  if (init_status_) init_status_ = stereo_.initStatus();
+  if (init_status_) init_status_ = landmark_row_matcher_.initStatus();
   cell_count_.resize(static_cast<std::size_t>(params.grid_cols * params.grid_rows));
   if (!init_status_) return;
   ekf_.reserveIds(params.map_reserve);
@@ -108,25 +108,11 @@ void SlamSystem::passTracks() {
 }
 
 Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                           SlamFrameResult& out, Executor& executor, StageObserver* observer) {
-  if (!init_status_) return init_status_;
-  out = SlamFrameResult{};
-  if (Status s = vo_.frontEnd(left, right, out.odometry, executor, observer); !s) return s;
-  return afterFrontEnd(left, right, out, executor, observer);
-}
-
-Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                            const StereoStageOutput& stereo, SlamFrameResult& out,
                            Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;
   out = SlamFrameResult{};
-  if (Status s = vo_.frontEnd(left, right, stereo, out.odometry, executor, observer); !s) return s;
-  return afterFrontEnd(left, right, out, executor, observer);
-}
-
-Status SlamSystem::afterFrontEnd(ImageView<const std::uint8_t> left,
-                                 ImageView<const std::uint8_t> right, SlamFrameResult& out,
-                                 Executor& executor, StageObserver* observer) {
+  if (Status s = vo_.frontEnd(left, stereo, out.odometry, observer); !s) return s;
   if (frame_ == 0) {
     prev_tracks_.clear();
     prev_landmark_uv_.clear();

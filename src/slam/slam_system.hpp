@@ -64,86 +64,33 @@
 #include "features/patch_similarity.hpp"
 #include "odometry/stereo_odometry.hpp"
 #include "slam/ekf_slam.hpp"
+#include "slam/estimator.hpp"
+#include "slam/slam_params.hpp"
 #include "slam/landmark_manager.hpp"
 
 namespace svslam {
 
-struct SlamSystemParams {
-  EkfSlamParams ekf;
-  double candidate_fraction = 0.1;     // share of new matches made candidates, (0, 1]
-  int candidate_min_frames = 3;        // consecutive frames tracked before initialisation, >= 2
-  double candidate_max_sigma_m = 0.5;  // stability: sqrt(trace cov) of the stereo point, m, > 0
-  int grid_cols = 8;                   // representativeness grid over the image, >= 1
-  int grid_rows = 6;
-  int max_per_cell = 3;                  // landmarks + candidates per cell and frame, >= 1
-  double init_sigma_uv_px = 0.25;        // image-plane localisation at initialisation, px, > 0
-  double track_matching_error_px = 0.5;  // consecutive frames (seed 001 sec 4.1)
-  double reperception_matching_error_px = 1.0;  // re-perceiving after a loop (seed: 1 px)
-  double track_tolerance_px = 1.5;              // consecutive frames (seed: 1.5 px)
-  double reperception_tolerance_px = 2.5;       // (seed: about 2.5 px)
-  int max_reperceptions = 10;                   // re-perception searches per frame, >= 0
-  int max_observations = 60;  // landmark observations per frame, >= 1: seed 001 updates with
-                              // every landmark matched; this only bounds the update cost
-  double landmark_exclusion_px = 2.0;        // see step 2, px, >= 0
-  double reperception_max_radius_px = 60.0;  // cap of the search radius, px
-  float reperception_min_zncc = 0.8f;
-  bool refine_observations = true;    // refine a tracked landmark's ZNCC position by
-                                      // Gauss-Newton (subpixel_refine.hpp) instead of keeping
-                                      // the parabola through the scores
-  int patch_half_px = 5;              // appearance patch stored per landmark, 1..15
-  int retire_unseen_frames = 2;       // a landmark unseen for fewer frames is never retired
-  double lost_rot_sigma_rad = 0.035;  // prediction covariance when the VME fails
-  double lost_trans_sigma_m = 0.5;
-  int map_reserve = 4096;  // landmarks ever initialised (in the state or retired) whose map
-                           // storage is preallocated (about 0.7 kB each), >= ekf.max_landmarks;
-                           // beyond it the storage grows by doubling
-  Status validate() const;
-};
-
-struct SlamFrameResult {
-  OdometryFrameResult odometry;  // front end + VME (T_first_cam there is pure odometry)
-  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();               // filter estimate
-  Eigen::Matrix<double, 6, 6> pose_cov = Eigen::Matrix<double, 6, 6>::Zero();  // [rot, trans]
-  int landmarks_in_state = 0;
-  int landmarks_in_map = 0;   // in the state + retired
-  int observed = 0;           // landmarks observed (tracked from the previous frame)
-  int reperceived = 0;        // landmarks found again by re-perception
-  int predicted_visible = 0;  // landmarks of the state predicted inside the image
-  int search_no_match = 0;    // ... not found in the left image (ZNCC)
-  int search_no_stereo = 0;   // ... found, but not in the right image
-  int gated = 0;              // observations rejected by the chi-square gate
-  int added = 0;
-  int retired = 0;
-  int restored = 0;  // retired anchored landmarks put back into the state
-  int candidates = 0;
-  int vme_matches = 0;  // matches given to the VME (non-landmarks)
-};
-
-class SlamSystem {
+class SlamSystem final : public Estimator {
  public:
   SlamSystem(const SlamSystemParams& params, const StereoOdometryParams& odometry,
              const StereoCalibration& calib);
-  const Status& initStatus() const { return init_status_; }
+  const Status& initStatus() const override { return init_status_; }
+  EstimatorOutputs outputs() const override { return {true, true}; }
 
-  // `observer` hears the odometry's stages and "ekf" (prediction, observation, selection).
-  Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                 SlamFrameResult& out, Executor& executor, StageObserver* observer = nullptr);
-  // The same with the stereo stage already run on this pair by the caller (see
-  // StereoOdometry::frontEnd with a StereoStageOutput): same results.
+  // Estimator::process; `observer` hears the odometry's stages and "ekf" (prediction,
+  // observation, selection).
   Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                  const StereoStageOutput& stereo, SlamFrameResult& out, Executor& executor,
-                 StageObserver* observer = nullptr);
+                 StageObserver* observer = nullptr) override;
+  TrackingFeedback feedback() const override { return vo_.feedback(); }
 
   // Every landmark ever initialised: in the state (current estimate) or retired.
-  std::vector<MapLandmark> map() const;
+  std::vector<MapLandmark> map() const override;
 
  private:
   // Whether (u, v) lies within landmark_exclusion_px of one of `landmarks_uv` (px).
   bool nearLandmark(const std::vector<Eigen::Vector2f>& landmarks_uv, float u, float v) const;
   void passTracks();
-  // process() after the front end; the EKF update's products run on `executor`.
-  Status afterFrontEnd(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                       SlamFrameResult& out, Executor& executor, StageObserver* observer);
   // Searches the landmarks of the state in the current pair; fills obs_ / obs_uv_.
   void searchLandmarks(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                        SlamFrameResult& out);
@@ -193,7 +140,9 @@ class SlamSystem {
   EkfSlam ekf_;
   LandmarkManager landmarks_;
   std::vector<PointTrack> prev_tracks_, cur_tracks_;
-  StereoPointMatcher stereo_;
+  // Step 3's right-image search of an observed landmark around its predicted disparity (one
+  // row search per landmark on this thread; the stereo stage matches the detected points).
+  StereoPointMatcher landmark_row_matcher_;
   std::vector<std::uint8_t> exclude_;
   std::vector<LandmarkObservation> obs_;
   std::vector<Eigen::Vector2f> obs_uv_;  // left image position of each observation

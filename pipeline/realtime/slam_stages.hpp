@@ -1,11 +1,14 @@
 #pragma once
-// The work of `svslam run` cut into the pipeline's stages (realtime/pipeline_runner.hpp):
+// The stages of `svslam run`, as the stage graph the runner executes
+// (realtime/stage_graph.hpp):
 //   capture    the next pair of the source (and its ground truth, when known);
-//   stereo     StereoStage: dense stereo, interest points, stereo matching;
-//   estimator  temporal matching, VME and, in ekf mode, the EKF (SlamSystem); commands that
-//              touch the map (reset, save_map) are applied here, between two frames;
-//   publisher  the output files (trajectory_kitti/tum, pose_covariance, groundtruth), the pose
-//              on LCM, and every stats_period_s the stats and map summary on LCM.
+//   stereo     the StereoStage: dense stereo, interest points, ROIs, stereo matching, 3D points.
+//              With ROI tracking its second half waits for the estimator's feedback on the
+//              previous frame (a FeedbackCell: the only edge running backwards);
+//   estimator  the Estimator of the configured mode (vo or ekf), one call per frame; commands
+//              that touch the map (reset, save_map) are applied here, between two frames;
+//   publisher  the run's outputs (run/run_publisher.hpp): files, the pose and stats on LCM.
+// Each stage is owned once, here; the runner owns the threads, edges and timing.
 #include <atomic>
 #include <memory>
 #include <mutex>
@@ -14,29 +17,29 @@
 #include "core/executor.hpp"
 #include "drivers/lcm/lcm_transport.hpp"
 #include "drivers/source/stereo_source.hpp"
-#include "odometry/stereo_odometry.hpp"
+#include "odometry/stereo_stage.hpp"
 #include "pipeline/config/run_config.hpp"
+#include "pipeline/realtime/edges.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
 #include "pipeline/run/run_outputs.hpp"
+#include "pipeline/run/run_publisher.hpp"
 #include "pipeline/run/run_summary.hpp"
-#include "slam/slam_system.hpp"
+#include "slam/estimator.hpp"
 
 namespace svslam::rt {
 
-class RunWork final : public PipelineWork {
+class SlamStages {
  public:
-  // `source` and `lcm` (may be null) outlive the work. Outputs go to `out_dir`.
-  RunWork(const config::RunConfig& cfg, drivers::StereoSource& source, const std::string& out_dir,
-          drivers::LcmLink* lcm);
-  ~RunWork() override;
-  // Opens the output files and builds the estimator; error naming what failed.
+  // `source` and `lcm` (may be null) outlive this object. Outputs go to `out_dir`.
+  SlamStages(const config::RunConfig& cfg, drivers::StereoSource& source,
+             const std::string& out_dir, drivers::LcmLink* lcm);
+  ~SlamStages();
+  // Builds the stages and opens the output files; error naming what failed.
   Status init();
-
-  Result<bool> capture(FrameSlot& slot) override;
-  Status stereo(FrameSlot& slot) override;
-  Status estimate(FrameSlot& slot) override;
-  Status publish(FrameSlot& slot) override;
-  void onThreadStart(const char* stage) override;
+  // The stage list; `capture_input` is the policy of the edge capture -> stereo.
+  StageGraph graph(EdgePolicy capture_input);
+  // The runner's latencies, for the stats on LCM (read by the publisher on its thread).
+  void setTimings(const StageTimings* timings) { publisher_->setTimings(timings); }
 
   // Capture ends after `n` frames (0 = the whole source).
   void setMaxFrames(int n) { max_frames_ = n; }
@@ -47,7 +50,7 @@ class RunWork final : public PipelineWork {
 
   // After the run (stages stopped): closes the files, writes landmarks.ply.
   Status finish();
-  const run::RunSummary& summary() const { return summary_; }
+  const run::RunSummary& summary() const { return publisher_->summary(); }
   // Algorithm stage times (dense_stereo, detect, stereo_match, temporal_match, motion, ekf,
   // front_end = stereo + estimator work, load). Read after the run.
   run::StageTimes stageTimes() const;
@@ -56,26 +59,34 @@ class RunWork final : public PipelineWork {
 
  private:
   class Clock;
+  Result<bool> capture(FrameSlot& slot);
+  Status stereo(FrameSlot& slot);
+  Status estimate(FrameSlot& slot);
+  Status estimateFrame(FrameSlot& slot);
+  void onThreadStart(const std::string& stage);
   Status buildEstimator();
   Status writeMap(const std::string& path);
-  void publishStats(TimeNs t_ns);
+  void applySaveMap(TimeNs t_ns);
   void publishMapSummary(TimeNs t_ns);
 
   config::RunConfig cfg_;
   drivers::StereoSource& source_;
   std::string out_dir_;
   drivers::LcmLink* lcm_;
-  bool ekf_mode_;
   std::atomic<std::int64_t> captured_{0};
   int max_frames_ = 0;
+  // Capture thread.
+  run::StageTimes capture_times_;
   // Stereo thread.
   std::unique_ptr<StereoStage> stereo_stage_;
   std::unique_ptr<Executor> stereo_executor_;
   std::unique_ptr<Clock> stereo_clock_;
   run::StageTimes stereo_times_;
+  std::int64_t last_stereo_seq_ = -1;  // the frame the stereo stage handed on last
+  // Estimator -> stereo: the feedback on each frame (ROI tracking).
+  FeedbackCell<TrackingFeedback> feedback_;
   // Estimator thread.
-  std::unique_ptr<SlamSystem> slam_;
-  std::unique_ptr<StereoOdometry> vo_;
+  std::unique_ptr<Estimator> estimator_;
   std::unique_ptr<Executor> estimator_executor_;  // its own pool: runs beside the stereo one
   std::unique_ptr<Clock> estimator_clock_;
   run::StageTimes estimator_times_;
@@ -84,15 +95,8 @@ class RunWork final : public PipelineWork {
   std::mutex save_mutex_;
   std::string save_path_;
   std::int64_t save_seq_ = -1;  // pending save_map command (-1: none)
-  // Capture thread.
-  run::StageTimes capture_times_;
   // Publisher thread.
-  run::TrajectoryWriter traj_, gt_;
-  run::LineWriter cov_file_;
-  std::string cov_line_;  // one pose_covariance.txt line, reused
-  run::RunSummary summary_;
-  LatencyRecorder e2e_, stereo_ms_, estimate_ms_;
-  std::int64_t last_seq_ = -1, seq_gaps_ = 0, next_stats_ns_ = 0;
+  std::unique_ptr<run::RunPublisher> publisher_;
   std::mutex warn_mutex_;
   std::string warnings_;
 };

@@ -1,0 +1,216 @@
+#include "pipeline/realtime/slam_stages.hpp"
+
+#include "pipeline/service/scheduling.hpp"
+#include "pipeline/thread_pool_executor.hpp"
+
+namespace svslam::rt {
+
+// Times the algorithm's sub-stages through the library's observer hook (one thread each).
+class SlamStages::Clock final : public StageObserver {
+ public:
+  explicit Clock(run::StageTimes& times) : times_(times) {}
+  void start() { last_ = steadyNowNs(); }
+  void stageDone(const char* stage) override {
+    const std::int64_t now = steadyNowNs();
+    times_.add(stage, static_cast<double>(now - last_) * 1e-6);
+    last_ = now;
+  }
+
+ private:
+  run::StageTimes& times_;
+  std::int64_t last_ = 0;
+};
+
+SlamStages::SlamStages(const config::RunConfig& cfg, drivers::StereoSource& source,
+                       const std::string& out_dir, drivers::LcmLink* lcm)
+    : cfg_(cfg), source_(source), out_dir_(out_dir), lcm_(lcm) {}
+
+SlamStages::~SlamStages() = default;
+
+Status SlamStages::buildEstimator() {
+  estimator_ = makeEstimator(cfg_.mode == "vo" ? EstimatorKind::kVo : EstimatorKind::kEkf, cfg_.slam, cfg_.odometry, source_.calibration());
+  return estimator_->initStatus();
+}
+
+Status SlamStages::init() {
+  stereo_stage_ = std::make_unique<StereoStage>(cfg_.odometry, source_.calibration());
+  if (Status s = stereo_stage_->initStatus(); !s) return s;
+  if (Status s = buildEstimator(); !s) return s;
+  // One pool per stage thread (a ThreadPoolExecutor serves one parallelFor at a time); the
+  // estimator's splits the EKF update's products. Results do not depend on either.
+  if (cfg_.threads > 1) {
+    stereo_executor_ = std::make_unique<ThreadPoolExecutor>(cfg_.threads);
+    estimator_executor_ = std::make_unique<ThreadPoolExecutor>(cfg_.threads);
+  } else {
+    stereo_executor_ = std::make_unique<SerialExecutor>();
+    estimator_executor_ = std::make_unique<SerialExecutor>();
+  }
+  stereo_clock_ = std::make_unique<Clock>(stereo_times_);
+  estimator_clock_ = std::make_unique<Clock>(estimator_times_);
+  publisher_ = std::make_unique<run::RunPublisher>(cfg_, out_dir_, estimator_->outputs(), lcm_,
+                                                   captured_);
+  Eigen::Isometry3d T;
+  return publisher_->open(source_.groundTruth(0, T));
+}
+
+StageGraph SlamStages::graph(EdgePolicy capture_input) {
+  feedback_.reset();
+  last_stereo_seq_ = -1;
+  StageGraph g;
+  g.source = {"capture", [this](FrameSlot& s) { return capture(s); }};
+  g.stages = {{"stereo", [this](FrameSlot& s) { return stereo(s); }, capture_input},
+              {"estimator", [this](FrameSlot& s) { return estimate(s); }},
+              {"publisher", [this](FrameSlot& s) { return publisher_->publish(s); }}};
+  g.on_thread_start = [this](const std::string& stage) { onThreadStart(stage); };
+  return g;
+}
+
+void SlamStages::onThreadStart(const std::string& stage) {
+  service::setCurrentThreadName("svslam-" + stage);
+  const config::PipelineConfig& p = cfg_.pipeline;
+  const service::ThreadScheduling* sched = nullptr;
+  if (stage == "capture") sched = &p.capture;
+  if (stage == "stereo") sched = &p.stereo;
+  if (stage == "estimator") sched = &p.estimator;
+  if (stage == "publisher") sched = &p.publisher;
+  if (!sched || (sched->cpus.empty() && sched->fifo_priority == 0)) return;
+  std::string warning;
+  const Status s = service::applyToCurrentThread(*sched, warning);
+  std::lock_guard<std::mutex> lock(warn_mutex_);
+  if (!s) warnings_ += stage + " thread: " + s.message() + "\n";
+  if (!warning.empty()) warnings_ += stage + " thread: " + warning + "\n";
+}
+
+std::string SlamStages::takeWarnings() {
+  std::lock_guard<std::mutex> lock(warn_mutex_);
+  std::string w;
+  w.swap(warnings_);
+  return w;
+}
+
+Result<bool> SlamStages::capture(FrameSlot& slot) {
+  if (max_frames_ > 0 && captured_.load() >= max_frames_) return false;
+  const std::int64_t t0 = steadyNowNs();
+  auto more = source_.next(slot.frame);
+  if (!more) return more.status();
+  if (!*more) return false;
+  capture_times_.add("load", static_cast<double>(steadyNowNs() - t0) * 1e-6);
+  slot.has_ground_truth = source_.groundTruth(slot.frame.index, slot.T_gt_first_cam);
+  ++captured_;
+  return true;
+}
+
+Status SlamStages::stereo(FrameSlot& slot) {
+  stereo_clock_->start();
+  const auto left = slot.frame.left.cview(), right = slot.frame.right.cview();
+  if (Status s = stereo_stage_->prepare(left, right, slot.stereo, *stereo_executor_,
+                                        stereo_clock_.get());
+      !s)
+    return s;
+  TrackingFeedback fb;  // no ROIs before the first frame
+  if (stereo_stage_->needsFeedback() && last_stereo_seq_ >= 0) {
+    const std::int64_t w0 = steadyNowNs();
+    if (!feedback_.wait(last_stereo_seq_, fb))
+      return Status::failedPrecondition("stereo: the estimator stopped");
+    stereo_times_.add("wait_estimator", static_cast<double>(steadyNowNs() - w0) * 1e-6);
+    stereo_clock_->start();
+  }
+  last_stereo_seq_ = slot.seq;
+  return stereo_stage_->finish(left, right, fb, slot.stereo, stereo_clock_.get());
+}
+
+Status SlamStages::estimate(FrameSlot& slot) {
+  const Status s = estimateFrame(slot);
+  // The stereo stage of the next frame waits for this (a failed run: for nothing more).
+  if (s)
+    feedback_.publish(slot.seq, estimator_->feedback());
+  else
+    feedback_.close();
+  return s;
+}
+
+Status SlamStages::estimateFrame(FrameSlot& slot) {
+  if (reset_requested_.exchange(false)) {
+    if (Status s = buildEstimator(); !s) return s;
+  }
+  estimator_clock_->start();
+  const Status s =
+      estimator_->process(slot.frame.left.cview(), slot.frame.right.cview(), slot.stereo,
+                          slot.result, *estimator_executor_, estimator_clock_.get());
+  if (!s) return Status(s.code(), "frame " + std::to_string(slot.frame.index) + ": " + s.message());
+  estimator_times_.add("front_end",
+                       static_cast<double>(steadyNowNs() - slot.stamps.start_ns[0]) * 1e-6);
+  if (lcm_ && estimator_->outputs().landmark_map) {
+    const std::int64_t now = steadyNowNs();
+    if (now >= next_map_ns_) {
+      publishMapSummary(slot.frame.t_ns);
+      next_map_ns_ = now + static_cast<std::int64_t>(cfg_.lcm.stats_period_s * 1e9);
+    }
+  }
+  applySaveMap(slot.frame.t_ns);
+  return Status::ok();
+}
+
+void SlamStages::requestSaveMap(const std::string& path, std::int64_t command_seq) {
+  std::lock_guard<std::mutex> lock(save_mutex_);
+  save_path_ = path;
+  save_seq_ = command_seq;
+}
+
+void SlamStages::applySaveMap(TimeNs t_ns) {
+  std::string save_path;
+  std::int64_t save_seq = -1;
+  {
+    std::lock_guard<std::mutex> lock(save_mutex_);
+    std::swap(save_seq, save_seq_);
+    save_path = save_path_;
+  }
+  if (save_seq < 0) return;
+  const std::string path = save_path.empty() ? out_dir_ + "/landmarks.ply" : save_path;
+  const Status ws = writeMap(path);
+  if (!lcm_) return;
+  drivers::CommandStatus cs;
+  cs.t_ns = t_ns;
+  cs.seq = save_seq;
+  cs.command = "save_map";
+  cs.ok = ws.isOk();
+  cs.message = ws ? "map written to " + path : ws.message();
+  (void)lcm_->publishCommandStatus(cs);
+}
+
+Status SlamStages::writeMap(const std::string& path) {
+  std::vector<run::PlyLandmark> ply;
+  for (const MapLandmark& m : estimator_->map())
+    ply.push_back({m.id, m.p_world, m.cov.diagonal().cwiseMax(0.0).cwiseSqrt(), m.active,
+                   m.observations});
+  return run::writeLandmarksPly(path, ply);
+}
+
+void SlamStages::publishMapSummary(TimeNs t_ns) {
+  drivers::MapSummaryReport m;
+  m.t_ns = t_ns;
+  const std::vector<MapLandmark> map = estimator_->map();
+  for (const MapLandmark& l : map) {
+    if (!l.active) continue;
+    m.points_world.push_back(l.p_world.cast<float>());
+  }
+  m.landmarks_in_state = static_cast<int>(m.points_world.size());
+  m.landmarks_in_map = static_cast<int>(map.size());
+  (void)lcm_->publishMap(m);
+}
+
+Status SlamStages::finish() {
+  publisher_->close();
+  if (estimator_ && estimator_->outputs().landmark_map)
+    return writeMap(out_dir_ + "/landmarks.ply");
+  return Status::ok();
+}
+
+run::StageTimes SlamStages::stageTimes() const {
+  run::StageTimes t = capture_times_;
+  t.merge(stereo_times_);
+  t.merge(estimator_times_);
+  return t;
+}
+
+}  // namespace svslam::rt

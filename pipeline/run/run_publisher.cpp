@@ -1,0 +1,92 @@
+#include "pipeline/run/run_publisher.hpp"
+
+#include <cstdio>
+
+namespace svslam::run {
+
+RunPublisher::RunPublisher(const config::RunConfig& cfg, const std::string& out_dir,
+                           EstimatorOutputs outputs, drivers::LcmLink* lcm,
+                           const std::atomic<std::int64_t>& captured)
+    : cfg_(cfg), out_dir_(out_dir), outputs_(outputs), lcm_(lcm), captured_(captured) {}
+
+Status RunPublisher::open(bool ground_truth) {
+  if (Status s = traj_.open(out_dir_ + "/trajectory_kitti.txt", out_dir_ + "/trajectory_tum.txt");
+      !s)
+    return s;
+  if (ground_truth) {
+    if (Status s = gt_.open(out_dir_ + "/groundtruth_kitti.txt", ""); !s) return s;
+  }
+  if (outputs_.pose_covariance) {
+    if (Status s = cov_file_.open(out_dir_ + "/pose_covariance.txt"); !s) return s;
+    cov_line_.reserve(36 * 32);  // 36 numbers of at most 31 characters each
+  }
+  return Status::ok();
+}
+
+void RunPublisher::close() {
+  traj_.close();
+  gt_.close();
+  cov_file_.close();
+}
+
+Status RunPublisher::publish(const rt::FrameSlot& slot) {
+  const SlamFrameResult& sr = slot.result;
+  if (Status s = traj_.append(slot.frame.t_ns, sr.T_world_cam); !s) return s;
+  if (outputs_.pose_covariance) {
+    cov_line_.clear();  // keeps its capacity (reserved in open)
+    char num[32];
+    for (int i = 0; i < 36; ++i) {
+      std::snprintf(num, sizeof num, "%s%.9e", i ? " " : "", sr.pose_cov(i / 6, i % 6));
+      cov_line_ += num;
+    }
+    if (Status s = cov_file_.append(cov_line_); !s) return s;
+  }
+  if (slot.has_ground_truth) {
+    if (Status s = gt_.append(slot.frame.t_ns, slot.T_gt_first_cam); !s) return s;
+  }
+  summary_.add(slot.frame.index, sr);
+  if (last_seq_ >= 0 && slot.seq > last_seq_ + 1) seq_gaps_ += slot.seq - last_seq_ - 1;
+  last_seq_ = slot.seq;
+  if (!lcm_) return Status::ok();
+  const std::int64_t now = rt::steadyNowNs();
+  drivers::PoseReport p;
+  p.t_ns = slot.frame.t_ns;
+  p.publish_t_ns = slot.frame.t_ns + (now - slot.stamps.capture_ns);  // source clock
+  p.seq = slot.seq;
+  p.T_world_cam = sr.T_world_cam;
+  p.cov = sr.pose_cov;
+  p.status = sr.odometry.frame == 0 ? drivers::TrackingStatus::kInitializing
+             : sr.odometry.tracked  ? drivers::TrackingStatus::kTracking
+                                    : drivers::TrackingStatus::kLost;
+  // A pose that cannot be published (non-finite) is an error of this frame, not of the run:
+  // it is skipped on LCM (the files keep the line) and counted by the link.
+  (void)lcm_->publishPose(p);
+  if (now >= next_stats_ns_) {
+    publishStats(slot.frame.t_ns);
+    next_stats_ns_ = now + static_cast<std::int64_t>(cfg_.lcm.stats_period_s * 1e9);
+  }
+  return Status::ok();
+}
+
+void RunPublisher::publishStats(TimeNs t_ns) {
+  drivers::StatsReport r;
+  r.t_ns = t_ns;
+  r.frames_in = captured_.load();
+  r.frames_out = summary_.frames;
+  r.frames_dropped = seq_gaps_;
+  r.frames_tracked = summary_.tracked;
+  if (timings_) {  // the frames before this one (the runner records a frame once published)
+    for (std::size_t i = 1; i < timings_->names().size(); ++i) {
+      if (timings_->names()[i] == "publisher") continue;
+      const rt::LatencySummary l = timings_->stage(i).summary();
+      r.stages.push_back({timings_->names()[i], l.p50_ms, l.p99_ms, l.max_ms});
+    }
+    const rt::LatencySummary e2e = timings_->endToEnd().summary();
+    r.e2e_p50_ms = e2e.p50_ms;
+    r.e2e_p99_ms = e2e.p99_ms;
+    r.e2e_max_ms = e2e.max_ms;
+  }
+  (void)lcm_->publishStats(r);
+}
+
+}  // namespace svslam::run

@@ -1,0 +1,52 @@
+#pragma once
+// The publisher stage of `svslam run`: per frame, the trajectory lines (trajectory_kitti.txt,
+// trajectory_tum.txt), the pose covariance line (pose_covariance.txt, when the estimator has a
+// pose covariance), the ground truth line (groundtruth_kitti.txt, when the source knows it), the
+// run summary, and on LCM the pose with its covariance and, every lcm.stats_period_s, the stats.
+// Runs on one thread; every buffer is reused from frame to frame.
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+#include "core/status.hpp"
+#include "drivers/lcm/lcm_transport.hpp"
+#include "pipeline/config/run_config.hpp"
+#include "pipeline/realtime/frame_slot.hpp"
+#include "pipeline/realtime/pipeline_runner.hpp"
+#include "pipeline/run/run_outputs.hpp"
+#include "pipeline/run/run_summary.hpp"
+#include "slam/estimator.hpp"
+
+namespace svslam::run {
+
+class RunPublisher {
+ public:
+  // `lcm` (may be null) and `captured` (frames read so far) outlive this object.
+  RunPublisher(const config::RunConfig& cfg, const std::string& out_dir,
+               EstimatorOutputs outputs, drivers::LcmLink* lcm,
+               const std::atomic<std::int64_t>& captured);
+  // Opens the files; `ground_truth`: the source knows the true poses.
+  Status open(bool ground_truth);
+  Status publish(const rt::FrameSlot& slot);
+  // The runner's latencies for the stats on LCM (null: none sent).
+  void setTimings(const rt::StageTimings* timings) { timings_ = timings; }
+  void close();
+  const RunSummary& summary() const { return summary_; }
+
+ private:
+  void publishStats(TimeNs t_ns);
+
+  const config::RunConfig& cfg_;
+  std::string out_dir_;
+  EstimatorOutputs outputs_;
+  drivers::LcmLink* lcm_;
+  const std::atomic<std::int64_t>& captured_;
+  const rt::StageTimings* timings_ = nullptr;
+  TrajectoryWriter traj_, gt_;
+  LineWriter cov_file_;
+  std::string cov_line_;  // one pose_covariance.txt line, reused
+  RunSummary summary_;
+  std::int64_t last_seq_ = -1, seq_gaps_ = 0, next_stats_ns_ = 0;
+};
+
+}  // namespace svslam::run

@@ -1,0 +1,47 @@
+#include "slam/estimator.hpp"
+
+#include "slam/slam_system.hpp"
+#include "slam/vo_estimator.hpp"
+
+namespace svslam {
+
+Status VoEstimator::process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                            const StereoStageOutput& stereo, SlamFrameResult& out,
+                            Executor& executor, StageObserver* observer) {
+  (void)right;  // the stereo stage has matched the pair
+  (void)executor;
+  out = SlamFrameResult{};
+  if (Status s = vo_.process(left, stereo, out.odometry, observer); !s) return s;
+  out.T_world_cam = out.odometry.T_first_cam;
+  out.pose_cov = out.odometry.covariance;
+  return Status::ok();
+}
+
+std::unique_ptr<Estimator> makeEstimator(EstimatorKind kind, const SlamSystemParams& slam,
+                                         const StereoOdometryParams& odometry,
+                                         const StereoCalibration& calib) {
+  if (kind == EstimatorKind::kVo) return std::make_unique<VoEstimator>(odometry, calib);
+  return std::make_unique<SlamSystem>(slam, odometry, calib);
+}
+
+FrameByFrame::FrameByFrame(const StereoOdometryParams& odometry, const StereoCalibration& calib,
+                           std::unique_ptr<Estimator> estimator)
+    : stage_(odometry, calib), estimator_(std::move(estimator)) {}
+
+Status FrameByFrame::initStatus() const {
+  if (!estimator_) return Status::invalidArgument("no estimator");
+  if (Status s = stage_.initStatus(); !s) return s;
+  return estimator_->initStatus();
+}
+
+Status FrameByFrame::process(ImageView<const std::uint8_t> left,
+                             ImageView<const std::uint8_t> right, SlamFrameResult& out,
+                             Executor& executor, StageObserver* observer) {
+  if (Status s = initStatus(); !s) return s;
+  if (Status s = stage_.process(left, right, estimator_->feedback(), stereo_, executor, observer);
+      !s)
+    return s;
+  return estimator_->process(left, right, stereo_, out, executor, observer);
+}
+
+}  // namespace svslam

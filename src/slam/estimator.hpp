@@ -1,0 +1,96 @@
+#pragma once
+// The estimator: what turns each frame's stereo stage output into a pose. One call per frame;
+// the pipeline's estimator stage and the offline tools drive every mode through this interface.
+//   vo   StereoOdometry: temporal matching + visual motion estimation chained frame to frame
+//        (slam/vo_estimator.hpp);
+//   ekf  SlamSystem: the same front end predicting an EKF over the pose and 3D landmarks
+//        (slam/slam_system.hpp).
+// Every estimator also returns the feedback the stereo stage of the next frame needs (the
+// predicted motion for clustered-feature ROI tracking).
+#include <memory>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/executor.hpp"
+#include "core/image.hpp"
+#include "core/stage_observer.hpp"
+#include "core/status.hpp"
+#include "odometry/stereo_odometry.hpp"
+#include "odometry/stereo_stage.hpp"
+#include "slam/landmark_manager.hpp"
+#include "slam/slam_params.hpp"
+
+namespace svslam {
+
+enum class EstimatorKind { kEkf, kVo };
+
+struct SlamFrameResult {
+  OdometryFrameResult odometry;  // front end + VME (T_first_cam there is pure odometry)
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // the estimate
+  // Covariance published with the pose, [rot rad, trans m]: the filter's pose covariance
+  // (ekf); the last frame-to-frame motion's (vo, which has no pose covariance).
+  Eigen::Matrix<double, 6, 6> pose_cov = Eigen::Matrix<double, 6, 6>::Zero();
+  int landmarks_in_state = 0;
+  int landmarks_in_map = 0;   // in the state + retired
+  int observed = 0;           // landmarks observed (tracked from the previous frame)
+  int reperceived = 0;        // landmarks found again by re-perception
+  int predicted_visible = 0;  // landmarks of the state predicted inside the image
+  int search_no_match = 0;    // ... not found in the left image (ZNCC)
+  int search_no_stereo = 0;   // ... found, but not in the right image
+  int gated = 0;              // observations rejected by the chi-square gate
+  int added = 0;
+  int retired = 0;
+  int restored = 0;  // retired anchored landmarks put back into the state
+  int candidates = 0;
+  int vme_matches = 0;  // matches given to the VME (non-landmarks)
+};
+
+// What an estimator produces beyond the pose (which outputs a run writes).
+struct EstimatorOutputs {
+  bool pose_covariance = false;  // pose_cov is a covariance of the pose (pose_covariance.txt)
+  bool landmark_map = false;     // map() holds landmarks (landmarks.ply, the map summary)
+};
+
+class Estimator {
+ public:
+  virtual ~Estimator() = default;
+  virtual const Status& initStatus() const = 0;
+  virtual EstimatorOutputs outputs() const = 0;
+  // One rectified pair (calibration size) and the stereo stage's output for it (a StereoStage
+  // built from the same odometry parameters, fed with this estimator's feedback(); kept alive
+  // and unchanged until the next call). `out` is overwritten. The executor splits the work that
+  // splits (results do not depend on it); `observer` hears the sub-stages.
+  virtual Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                         const StereoStageOutput& stereo, SlamFrameResult& out,
+                         Executor& executor, StageObserver* observer = nullptr) = 0;
+  // For the stereo stage of the next frame.
+  virtual TrackingFeedback feedback() const = 0;
+  // Every landmark ever initialised (empty without a landmark map).
+  virtual std::vector<MapLandmark> map() const { return {}; }
+};
+
+// The estimator of a kind; check initStatus() (invalid parameters or calibration).
+std::unique_ptr<Estimator> makeEstimator(EstimatorKind kind, const SlamSystemParams& slam,
+                                         const StereoOdometryParams& odometry,
+                                         const StereoCalibration& calib);
+
+// The stereo stage and an estimator chained on the calling thread, one pair after the other:
+// what the pipeline's stereo and estimator stages do to each frame, for tests, benchmarks and
+// tools. The pipeline itself owns its stage and estimator and does not use this.
+class FrameByFrame {
+ public:
+  FrameByFrame(const StereoOdometryParams& odometry, const StereoCalibration& calib,
+               std::unique_ptr<Estimator> estimator);
+  Status initStatus() const;
+  Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                 SlamFrameResult& out, Executor& executor, StageObserver* observer = nullptr);
+  Estimator& estimator() { return *estimator_; }
+  const StereoStageOutput& stereo() const { return stereo_; }
+
+ private:
+  StereoStage stage_;
+  StereoStageOutput stereo_;
+  std::unique_ptr<Estimator> estimator_;
+};
+
+}  // namespace svslam

@@ -1,0 +1,40 @@
+#pragma once
+// Parameters of the EKF SLAM system (slam/slam_system.hpp: the steps the comments refer to).
+#include "core/status.hpp"
+#include "slam/ekf_slam.hpp"
+
+namespace svslam {
+
+struct SlamSystemParams {
+  EkfSlamParams ekf;
+  double candidate_fraction = 0.1;     // share of new matches made candidates, (0, 1]
+  int candidate_min_frames = 3;        // consecutive frames tracked before initialisation, >= 2
+  double candidate_max_sigma_m = 0.5;  // stability: sqrt(trace cov) of the stereo point, m, > 0
+  int grid_cols = 8;                   // representativeness grid over the image, >= 1
+  int grid_rows = 6;
+  int max_per_cell = 3;                  // landmarks + candidates per cell and frame, >= 1
+  double init_sigma_uv_px = 0.25;        // image-plane localisation at initialisation, px, > 0
+  double track_matching_error_px = 0.5;  // consecutive frames (seed 001 sec 4.1)
+  double reperception_matching_error_px = 1.0;  // re-perceiving after a loop (seed: 1 px)
+  double track_tolerance_px = 1.5;              // consecutive frames (seed: 1.5 px)
+  double reperception_tolerance_px = 2.5;       // (seed: about 2.5 px)
+  int max_reperceptions = 10;                   // re-perception searches per frame, >= 0
+  int max_observations = 60;  // landmark observations per frame, >= 1: seed 001 updates with
+                              // every landmark matched; this only bounds the update cost
+  double landmark_exclusion_px = 2.0;        // see step 2, px, >= 0
+  double reperception_max_radius_px = 60.0;  // cap of the search radius, px
+  float reperception_min_zncc = 0.8f;
+  bool refine_observations = true;    // refine a tracked landmark's ZNCC position by
+                                      // Gauss-Newton (subpixel_refine.hpp) instead of keeping
+                                      // the parabola through the scores
+  int patch_half_px = 5;              // appearance patch stored per landmark, 1..15
+  int retire_unseen_frames = 2;       // a landmark unseen for fewer frames is never retired
+  double lost_rot_sigma_rad = 0.035;  // prediction covariance when the VME fails
+  double lost_trans_sigma_m = 0.5;
+  int map_reserve = 4096;  // landmarks ever initialised (in the state or retired) whose map
+                           // storage is preallocated (about 0.7 kB each), >= ekf.max_landmarks;
+                           // beyond it the storage grows by doubling
+  Status validate() const;
+};
+
+}  // namespace svslam
