@@ -26,7 +26,11 @@ class RunWork::Clock final : public StageObserver {
 
 RunWork::RunWork(const config::RunConfig& cfg, drivers::StereoSource& source,
                  const std::string& out_dir, drivers::LcmLink* lcm)
-    : cfg_(cfg), source_(source), out_dir_(out_dir), lcm_(lcm), ekf_mode_(cfg.mode == "ekf") {}
+    : cfg_(cfg),
+      source_(source),
+      out_dir_(out_dir),
+      lcm_(lcm),
+      ekf_mode_(cfg.mode == config::EstimatorMode::kEkf) {}
 
 RunWork::~RunWork() = default;
 
