@@ -53,8 +53,7 @@ Outcome runOnce(drivers::PreloadedSource* frames_in_memory, double rate_hz, bool
   drivers::PreloadedSource& source = *frames_in_memory;
   source.rewind();
   config::RunConfig cfg;
-  cfg.threads = threads;
-  cfg.odometry.dense_stereo.num_stripes = threads;
+  config::applyThreads(cfg, threads);
   cfg.pipeline.sequential = sequential;
   cfg.pipeline.rate_hz = rate_hz;
   const std::string out = (std::filesystem::temp_directory_path() / "svslam_bench_latency").string();

@@ -1,6 +1,6 @@
 #pragma once
-// The svslam subcommands. Each takes the words after its name, prints its JSON result on
-// stdout and errors on stderr, and returns the process exit code (0 = success).
+// The svslam subcommands. Each takes the words after its name, prints its result on stdout (JSON;
+// config: YAML) and errors on stderr, and returns the process exit code (0 = success).
 #include <string>
 #include <vector>
 
@@ -11,6 +11,7 @@ int runEvalDisparity(const std::vector<std::string>& args);
 int runFitSigma(const std::vector<std::string>& args);
 int runEvalTrajectory(const std::vector<std::string>& args);
 int runPipeline(const std::vector<std::string>& args);
+int runConfig(const std::vector<std::string>& args);  // prints the documented defaults (YAML)
 int runListen(const std::vector<std::string>& args);  // cli/listen_command.cpp (LCM)
 
 }  // namespace svslam::cli

@@ -18,6 +18,7 @@ constexpr const char* kUsage =
     "  eval-disparity   score a disparity map (given or computed) against ground truth\n"
     "  fit-sigma        fit the curvature -> sigma_d model of the disparity on ground truth\n"
     "  run              visual odometry on a stereo sequence (default: built-in synthetic flight)\n"
+    "  config           print the documented configuration of 'run' at its defaults (--defaults)\n"
     "  eval-trajectory  drift, ATE and RPE of a trajectory against ground truth (KITTI/TUM/EuRoC)\n"
 #ifdef SVSLAM_HAVE_LISTEN
     "  listen           print the poses (with covariance) and stats published on LCM\n"
@@ -43,6 +44,7 @@ int main(int argc, char** argv) {
     if (cmd == "eval-disparity") return svslam::cli::runEvalDisparity(args);
     if (cmd == "fit-sigma") return svslam::cli::runFitSigma(args);
     if (cmd == "run") return svslam::cli::runPipeline(args);
+    if (cmd == "config") return svslam::cli::runConfig(args);
     if (cmd == "eval-trajectory") return svslam::cli::runEvalTrajectory(args);
 #ifdef SVSLAM_HAVE_LISTEN
     if (cmd == "listen") return svslam::cli::runListen(args);

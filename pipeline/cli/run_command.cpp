@@ -43,14 +43,11 @@ Status applyOverrides(const ArgParser& p, config::RunConfig& cfg) {
   if (p.has("threads")) {
     auto n = p.getInt("threads", 1, 256);
     if (!n) return n.status();
-    cfg.threads = *n;
-    cfg.odometry.dense_stereo.num_stripes = *n;
+    config::applyThreads(cfg, *n);
   }
-  if (p.has("mode")) {
-    cfg.mode = p.get("mode");
-    if (cfg.mode != "ekf" && cfg.mode != "vo")
-      return Status::invalidArgument("--mode: unknown mode '" + cfg.mode + "' (use ekf or vo)");
-  }
+  if (p.has("mode") && !config::parseName(config::kEstimatorModeNames, p.get("mode"), cfg.mode))
+    return Status::invalidArgument("--mode: unknown mode '" + p.get("mode") + "' (use " +
+                                   config::nameList(config::kEstimatorModeNames) + ")");
   if (p.flag("sequential")) cfg.pipeline.sequential = true;
   if (p.flag("preload")) cfg.pipeline.preload = true;
   if (p.has("rate")) {
@@ -194,8 +191,9 @@ int runPipeline(const std::vector<std::string>& args) {
   opts.rate_hz = cfg.pipeline.rate_hz;
   opts.queue_capacity = cfg.pipeline.queue_capacity;
   if (Status s = opts.validate(); !s) return fail(s);
-  const bool keep_newest = cfg.pipeline.capture_policy == "newest" ||
-                           (cfg.pipeline.capture_policy == "auto" && (live || opts.rate_hz > 0));
+  const bool keep_newest = cfg.pipeline.capture_policy == config::CapturePolicy::kNewest ||
+                           (cfg.pipeline.capture_policy == config::CapturePolicy::kAuto &&
+                            (live || opts.rate_hz > 0));
   rt::PipelineRunner runner(opts,
                             work.graph(keep_newest ? rt::EdgePolicy::kNewest
                                                    : rt::EdgePolicy::kBlocking));
@@ -216,7 +214,7 @@ int runPipeline(const std::vector<std::string>& args) {
                                    static_cast<std::int64_t>(cfg.service.stall_timeout_s * 1e9));
   rt::PipelineControl control;
   bool ready_sent = false, stopping_sent = false;
-  if (cfg.service.ready == "start") {
+  if (cfg.service.ready == config::ReadyWhen::kStart) {
     notifier.ready("started");
     ready_sent = true;
   }
@@ -272,7 +270,7 @@ int runPipeline(const std::vector<std::string>& args) {
   if (!error.empty()) return fail(Status::ioError(error));
   JsonObject j;
   j.add("source", source_spec)
-      .add("mode", cfg.mode)
+      .add("mode", config::toString(cfg.mode))
       .add("out", out_dir)
       .add("threaded", !opts.sequential)
       .add("frames", work.summary().frames)

@@ -1,24 +1,37 @@
 #pragma once
 // The real-time part of the `svslam run` configuration: the pipeline (threads, queues, pacing,
-// scheduling), LCM publishing and the service life cycle. Keys documented in config/svslam.yaml.
+// scheduling), LCM publishing and the service life cycle. Their keys, units, ranges and docs
+// are declared in pipeline_config_keys.cpp.
 #include <string>
 
 #include "core/status.hpp"
 #include "drivers/lcm/lcm_transport.hpp"
+#include "pipeline/config/enum_names.hpp"
 #include "pipeline/service/scheduling.hpp"
 
 namespace svslam::config {
 
-class ConfigReader;
+// Capture edge: kNewest keeps the newest frame and counts drops (cameras, paced replays),
+// kBlock waits for the stereo stage (no drop); kAuto: newest for live sources (size -1) and
+// paced replays, block otherwise.
+enum class CapturePolicy { kAuto, kNewest, kBlock };
+inline constexpr EnumNames<CapturePolicy, 3> kCapturePolicyNames{
+    {{"auto", CapturePolicy::kAuto},
+     {"newest", CapturePolicy::kNewest},
+     {"block", CapturePolicy::kBlock}}};
+const char* toString(CapturePolicy p);
+
+// When READY=1 goes to systemd: after the first published pose, or when the pipeline starts.
+enum class ReadyWhen { kFirstPose, kStart };
+inline constexpr EnumNames<ReadyWhen, 2> kReadyWhenNames{
+    {{"first_pose", ReadyWhen::kFirstPose}, {"start", ReadyWhen::kStart}}};
+const char* toString(ReadyWhen r);
 
 struct PipelineConfig {
   bool sequential = false;  // every stage on one thread (same outputs as threaded)
   double rate_hz = 0.0;     // replay a recorded source at this rate; 0 = as fast as possible
-  // Capture edge: "newest" keeps the newest frame and counts drops (cameras, paced replays),
-  // "block" waits for the stereo stage (no drop); "auto": newest for live sources (size -1) and
-  // paced replays, block otherwise.
-  std::string capture_policy = "auto";
-  int queue_capacity = 2;   // frames per inter-stage queue, 1..64
+  CapturePolicy capture_policy = CapturePolicy::kAuto;  // the capture edge's queue policy
+  int queue_capacity = 2;                               // frames per inter-stage queue, 1..64
   // Read the whole recorded sequence into memory before the run (a paced replay then measures
   // the pipeline, not the disk or the synthetic renderer). Ignored for live sources.
   bool preload = false;
@@ -28,21 +41,20 @@ struct PipelineConfig {
 };
 
 struct LcmConfig {
-  bool enabled = false;       // publish poses / stats / map and listen for commands
-  drivers::LcmParams params;       // url and channel names
+  bool enabled = false;         // publish poses / stats / map and listen for commands
+  drivers::LcmParams params;    // url and channel names
   double stats_period_s = 1.0;  // stats and map summary every this many s
 };
 
 struct ServiceConfig {
-  // READY=1 to systemd after the first published pose ("first_pose") or when the pipeline
-  // starts ("start").
-  std::string ready = "first_pose";
+  ReadyWhen ready = ReadyWhen::kFirstPose;  // when READY=1 goes to systemd
   // The health check pings the watchdog only while frames complete; a pipeline that has
   // published nothing for this long (and is not paused) stops pinging, s.
   double stall_timeout_s = 5.0;
 };
 
-// Reads the pipeline.*, lcm.* and service.* keys.
-Status readPipelineConfig(ConfigReader& r, PipelineConfig& p, LcmConfig& l, ServiceConfig& s);
+// The checks across keys of pipeline.* and lcm.* (each key's own range is checked when read);
+// `file` prefixes the message.
+Status checkPipelineConfig(const std::string& file, const PipelineConfig& p, const LcmConfig& l);
 
 }  // namespace svslam::config

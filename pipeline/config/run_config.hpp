@@ -1,24 +1,34 @@
 #pragma once
-// The configuration of `svslam run` (documented example: config/svslam.yaml). Every key is
-// optional; defaults are the struct defaults below and those of the component parameter
-// structs. Unknown keys and out-of-range values are rejected with a message naming the key.
+// The configuration of `svslam run`. Every key is optional; defaults are the struct defaults
+// below and those of the component parameter structs. Each key is declared once, with its unit,
+// range and doc, in run_config_keys.cpp / pipeline_config_keys.cpp; the reader and
+// `svslam config --defaults` (which prints config/svslam.yaml) derive from those tables.
+// Unknown keys, renamed keys and out-of-range values are rejected with a message naming the key.
 #include <cstdint>
 #include <set>
 #include <string>
 
 #include "core/status.hpp"
 #include "odometry/stereo_odometry.hpp"
+#include "pipeline/config/enum_names.hpp"
 #include "pipeline/config/pipeline_config.hpp"
-#include "slam/slam_system.hpp"
+#include "slam/estimator.hpp"
+#include "slam/slam_params.hpp"
 
 namespace svslam::config {
+
+// kEkf: EKF SLAM over pose and landmarks; kVo: pure visual odometry (slam/estimator.hpp).
+using EstimatorMode = EstimatorKind;
+inline constexpr EnumNames<EstimatorMode, 2> kEstimatorModeNames{
+    {{"ekf", EstimatorMode::kEkf}, {"vo", EstimatorMode::kVo}}};
+const char* toString(EstimatorMode m);
 
 struct RunConfig {
   std::string source = "synthetic";  // source specification (drivers/source/stereo_source.hpp)
   int max_frames = 0;                // 0 = the whole sequence
   int threads = 1;                   // worker threads of the stages that split work
   std::uint64_t seed = 1;            // seeds every random choice (RANSAC)
-  std::string mode = "ekf";          // ekf (SLAM filter) | vo (pure visual odometry)
+  EstimatorMode mode = EstimatorMode::kEkf;
   StereoOdometryParams odometry;
   SlamSystemParams slam;
   PipelineConfig pipeline;  // pipeline.*: threads, queues, pacing, scheduling
@@ -26,12 +36,23 @@ struct RunConfig {
   ServiceConfig service;    // service.*: systemd life cycle
 };
 
+// Sets the worker threads and everything that follows them (the dense stereo stripes).
+void applyThreads(RunConfig& cfg, int threads);
+
 // Reads `path` (empty: defaults only) into `out`. With `changed_keys`, also the keys of the file
 // whose value differs from what `out` held (into a default RunConfig: the keys that change a
 // default).
 Status loadRunConfig(const std::string& path, RunConfig& out,
                      std::set<std::string>* changed_keys = nullptr);
 // Same, from YAML text (tests).
-Status parseRunConfig(const std::string& yaml_text, const std::string& name, RunConfig& out);
+Status parseRunConfig(const std::string& yaml_text, const std::string& name, RunConfig& out,
+                      std::set<std::string>* changed_keys = nullptr);
+
+// Every key with the value it has in `cfg`, section by section, each with a comment giving its
+// range or choices, unit and meaning. Reads back to the same values (floats exactly).
+std::string formatRunConfig(const RunConfig& cfg);
+// What `svslam config --defaults` prints (config/svslam.yaml): a header of comment lines, then
+// formatRunConfig(RunConfig{}).
+std::string defaultsYaml();
 
 }  // namespace svslam::config

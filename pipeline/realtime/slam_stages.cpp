@@ -28,7 +28,7 @@ SlamStages::SlamStages(const config::RunConfig& cfg, drivers::StereoSource& sour
 SlamStages::~SlamStages() = default;
 
 Status SlamStages::buildEstimator() {
-  estimator_ = makeEstimator(cfg_.mode == "vo" ? EstimatorKind::kVo : EstimatorKind::kEkf, cfg_.slam, cfg_.odometry, source_.calibration());
+  estimator_ = makeEstimator(cfg_.mode, cfg_.slam, cfg_.odometry, source_.calibration());
   return estimator_->initStatus();
 }
 

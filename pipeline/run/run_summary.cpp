@@ -63,7 +63,7 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
   const double n = std::max(1, s.frames);
   JsonObject j;
   j.add("source", source)
-      .add("mode", cfg.mode)
+      .add("mode", config::toString(cfg.mode))
       .add("frames", s.frames)
       .add("frames_tracked", s.tracked)
       .add("frames_without_pose", s.frames - s.tracked)
@@ -79,7 +79,7 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
       .add("dense_stereo", cfg.odometry.dense)
       .add("seed", static_cast<std::int64_t>(cfg.seed))
       .add("front_end_median_ms", times.median("front_end"), 3);
-  if (cfg.mode == "ekf") {
+  if (cfg.mode == config::EstimatorMode::kEkf) {
     j.add("landmarks_in_state_mean", s.sum_in_state / n, 1)
         .add("landmarks_in_state_max", s.max_in_state)
         .add("landmarks_in_map", s.landmarks_in_map)

@@ -39,7 +39,7 @@ TEST(RunConfig, ValuesAreApplied) {
   ASSERT_TRUE(parseRunConfig("seed: 42\nthreads: 2\nsource: kitti:/x\n"
                              "stereo_match: {max_disp_px: 96, min_zncc: 0.7}\n"
                              "detector: {response: shi-tomasi}\nmotion: {ransac: true}\n"
-                             "dense_stereo: {enabled: true, max_disp: 96}\n",
+                             "dense_stereo: {enabled: true, max_disp_px: 96}\n",
                              "t.yaml", c)
                   .isOk());
   EXPECT_EQ(c.seed, 42u);
@@ -87,7 +87,7 @@ TEST(RunConfig, BadValuesAreNamed) {
   EXPECT_NE(errorOf("stereo_match: {min_disp_px: 50, max_disp_px: 40}\n")
                 .find("stereo_match.max_disp_px"),
             std::string::npos);
-  EXPECT_NE(errorOf("dense_stereo: {enabled: true, window_w: 4}\n").find("dense_stereo"),
+  EXPECT_NE(errorOf("dense_stereo: {enabled: true, window_w_px: 4}\n").find("dense_stereo"),
             std::string::npos);
   EXPECT_NE(errorOf("dense_stereo: {enabled: true}\nodometry: {match_sigma_px: 0.7}\n")
                 .find("match_sigma_px"),

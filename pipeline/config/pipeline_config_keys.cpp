@@ -1,0 +1,115 @@
+// The keys of the pipeline, lcm and service sections: field, unit, range and doc of each, once.
+#include <cmath>
+
+#include "pipeline/config/config_keys.hpp"
+
+namespace svslam::config {
+namespace {
+
+// pipeline.scheduling.<stage>: CPU affinity (a list of CPU indices) and SCHED_FIFO priority.
+template <typename F>
+ConfigSection scheduling(const std::string& stage, F thread) {
+  ConfigKey cpus{"cpus", "", "0..1023 each", "CPUs the thread may run on; [] = any", {}, {}};
+  cpus.read = [thread](ConfigReader& r, const std::string& key, RunConfig& c) {
+    service::ThreadScheduling& t = thread(c);
+    std::vector<double> list(t.cpus.begin(), t.cpus.end());
+    SVSLAM_TRY(r.read(key, list));
+    t.cpus.clear();
+    for (double x : list) {
+      if (!(x >= 0 && x <= 1023 && x == std::floor(x)))
+        return Status::invalidArgument(r.name() + ": key '" + key +
+                                       "' holds a value that is not a CPU index (0..1023)");
+      t.cpus.push_back(static_cast<int>(x));
+    }
+    return Status::ok();
+  };
+  cpus.value = [thread](const RunConfig& c) { return formatValue(thread(c).cpus); };
+  auto priority = [thread](auto& c) -> auto& { return thread(c).fifo_priority; };
+  return {"pipeline.scheduling." + stage,
+          "",
+          {
+              std::move(cpus),
+              number("fifo_priority", priority, 0, 99, "",
+                     "SCHED_FIFO priority; 0 = normal scheduling"),
+          }};
+}
+
+ConfigSection pipelineSection() {
+  ConfigSection s{"pipeline", "the real-time pipeline (pipeline/realtime/pipeline_runner.hpp)", {}};
+  s.keys = {
+      flag("sequential", SVSLAM_FIELD(pipeline.sequential),
+           "true: every stage on one thread (same outputs); --sequential"),
+      number("rate_hz", SVSLAM_FIELD(pipeline.rate_hz), 0, 10000, "Hz",
+             "replay a recorded source at this rate, frames stamped as if captured then; "
+             "0 = as fast as possible; --rate"),
+      choice("capture_policy", SVSLAM_FIELD(pipeline.capture_policy), kCapturePolicyNames,
+             "newest: the capture edge keeps the newest frame and counts drops; block: capture "
+             "waits (no drop); auto: newest for live sources and paced replays, else block"),
+      number("queue_capacity", SVSLAM_FIELD(pipeline.queue_capacity), 1, 64, "",
+             "frames per inter-stage queue"),
+      flag("preload", SVSLAM_FIELD(pipeline.preload),
+           "read the recorded sequence into memory first; --preload"),
+      number("progress_period_s", SVSLAM_FIELD(pipeline.progress_period_s), 0, 1e6, "s",
+             "progress line on stderr every this many s; 0 = never"),
+  };
+  return s;
+}
+
+ConfigSection lcmSection() {
+  ConfigSection s{"lcm", "LCM publishing and commands (docs/lcm.md)", {}};
+  s.keys = {
+      flag("enabled", SVSLAM_FIELD(lcm.enabled),
+           "true (or --lcm-url): publish poses, stats, map; listen for commands"),
+      text("url", SVSLAM_FIELD(lcm.params.url), "LCM provider URL"),
+      text("pose_channel", SVSLAM_FIELD(lcm.params.pose_channel),
+           "svslam_lcm.pose_t, every frame, with the 6x6 covariance"),
+      text("stats_channel", SVSLAM_FIELD(lcm.params.stats_channel),
+           "svslam_lcm.stats_t, every stats_period_s"),
+      text("map_channel", SVSLAM_FIELD(lcm.params.map_channel),
+           "svslam_lcm.map_summary_t, every stats_period_s (ekf mode)"),
+      text("command_channel", SVSLAM_FIELD(lcm.params.command_channel),
+           "svslam_lcm.command_t: reset | save_map | pause | resume | shutdown"),
+      text("status_channel", SVSLAM_FIELD(lcm.params.status_channel),
+           "svslam_lcm.command_status_t answers"),
+      number("stats_period_s", SVSLAM_FIELD(lcm.stats_period_s), 0.01, 3600, "s",
+             "stats and map summary every this many s"),
+  };
+  return s;
+}
+
+ConfigSection serviceSection() {
+  ConfigSection s{"service", "life cycle under systemd (docs/service.md)", {}};
+  s.keys = {
+      choice("ready", SVSLAM_FIELD(service.ready), kReadyWhenNames,
+             "READY=1 after the first published pose, or when the pipeline starts"),
+      number("stall_timeout_s", SVSLAM_FIELD(service.stall_timeout_s), 0.1, 3600, "s",
+             "no pose for this long (not paused): the health check stops pinging the watchdog"),
+  };
+  return s;
+}
+
+}  // namespace
+
+std::vector<ConfigSection> pipelineConfigSections() {
+  return {pipelineSection(),
+          {"pipeline.scheduling",
+           "per stage thread; a refused FIFO priority degrades to normal scheduling with a warning",
+           {}},
+          scheduling("capture", SVSLAM_FIELD(pipeline.capture)),
+          scheduling("stereo", SVSLAM_FIELD(pipeline.stereo)),
+          scheduling("estimator", SVSLAM_FIELD(pipeline.estimator)),
+          scheduling("publisher", SVSLAM_FIELD(pipeline.publisher)),
+          lcmSection(),
+          serviceSection()};
+}
+
+const std::vector<ConfigSection>& allConfigSections() {
+  static const std::vector<ConfigSection> kAll = [] {
+    std::vector<ConfigSection> all = runConfigSections();
+    for (ConfigSection& s : pipelineConfigSections()) all.push_back(std::move(s));
+    return all;
+  }();
+  return kAll;
+}
+
+}  // namespace svslam::config
