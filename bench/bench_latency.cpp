@@ -21,7 +21,7 @@
 #include "drivers/source/stereo_source.hpp"
 #include "pipeline/config/run_config.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
-#include "pipeline/realtime/stage_work.hpp"
+#include "pipeline/realtime/slam_stages.hpp"
 
 using namespace svslam;
 
@@ -58,7 +58,7 @@ Outcome runOnce(drivers::PreloadedSource* frames_in_memory, double rate_hz, bool
   cfg.pipeline.rate_hz = rate_hz;
   const std::string out = (std::filesystem::temp_directory_path() / "svslam_bench_latency").string();
   std::filesystem::create_directories(out);
-  rt::RunWork work(cfg, source, out, nullptr);
+  rt::SlamStages work(cfg, source, out, nullptr);
   if (Status s = work.init(); !s) {
     std::fprintf(stderr, "bench_latency: %s\n", s.message().c_str());
     return o;
@@ -66,11 +66,11 @@ Outcome runOnce(drivers::PreloadedSource* frames_in_memory, double rate_hz, bool
   rt::PipelineOptions opts;
   opts.sequential = sequential;
   opts.rate_hz = rate_hz;
-  opts.keep_newest = rate_hz > 0;  // as for a camera: a late frame is dropped, and counted
+  // As for a camera: a late frame is dropped, and counted.
+  rt::PipelineRunner runner(
+      opts, work.graph(rate_hz > 0 ? rt::EdgePolicy::kNewest : rt::EdgePolicy::kBlocking));
   std::vector<std::unique_ptr<rt::FrameSlot>> slots;
-  for (int i = 0; i < rt::PipelineRunner::slotsNeeded(opts); ++i)
-    slots.push_back(std::make_unique<rt::FrameSlot>());
-  rt::PipelineRunner runner(opts, work);
+  for (int i = 0; i < runner.slotsNeeded(); ++i) slots.push_back(std::make_unique<rt::FrameSlot>());
   rt::PipelineControl control;
   const Status s = runner.run(slots, control, nullptr);
   (void)work.finish();
@@ -85,7 +85,8 @@ void print(const char* name, const std::string& spec, double rate_hz, const Outc
   const rt::PipelineReport& r = thr.report;
   const rt::PipelineReport& q = seq.report;
   // One thread's time per frame: the sum of the stage times of the sequential run.
-  const double seq_frame_ms = q.stereo.p50_ms + q.estimate.p50_ms + q.publish.p50_ms;
+  const double seq_frame_ms =
+      q.stage("stereo").p50_ms + q.stage("estimator").p50_ms + q.stage("publisher").p50_ms;
   std::printf(
       "{\"scenario\": \"%s\", \"source\": \"%s\", \"rate_hz\": %.1f, \"frames\": %lld, "
       "\"published\": %lld, \"dropped\": %lld, \"latency_p50_ms\": %.2f, \"latency_p99_ms\": %.2f, "
@@ -94,7 +95,7 @@ void print(const char* name, const std::string& spec, double rate_hz, const Outc
       "\"threaded_over_sequential_fps\": %.2f, \"target\": \"%s\"}\n",
       name, spec.c_str(), rate_hz, static_cast<long long>(r.captured),
       static_cast<long long>(r.published), static_cast<long long>(r.dropped), r.end_to_end.p50_ms,
-      r.end_to_end.p99_ms, r.end_to_end.max_ms, r.fps, r.stereo.p50_ms, r.estimate.p50_ms, q.fps,
+      r.end_to_end.p99_ms, r.end_to_end.max_ms, r.fps, r.stage("stereo").p50_ms, r.stage("estimator").p50_ms, q.fps,
       seq_frame_ms, q.fps > 0 ? r.fps / q.fps : 0.0, target);
   std::fflush(stdout);
 }

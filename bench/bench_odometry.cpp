@@ -17,6 +17,7 @@
 #include "drivers/files/opencv_view.hpp"
 #include "drivers/source/stereo_source.hpp"
 #include "odometry/stereo_odometry.hpp"
+#include "odometry/stereo_stage.hpp"
 
 namespace {
 
@@ -55,14 +56,18 @@ void BM_FrontEnd_svslam(benchmark::State& st) {
     st.SkipWithError(("no KITTI data: " + seq.error).c_str());
     return;
   }
-  svslam::StereoOdometry vo(svslam::StereoOdometryParams{}, seq.calib);
+  const svslam::StereoOdometryParams params;
+  svslam::StereoStage stage(params, seq.calib);
+  svslam::StereoStageOutput stereo;
+  svslam::StereoOdometry vo(params, seq.calib);
   svslam::SerialExecutor ex;
   svslam::OdometryFrameResult r;
   int tracked = 0;
   for (auto _ : st) {
     vo.resetTracking();
     for (const auto& f : seq.frames) {
-      (void)vo.process(f.left.cview(), f.right.cview(), r, ex);
+      (void)stage.process(f.left.cview(), f.right.cview(), vo.feedback(), stereo, ex);
+      (void)vo.process(f.left.cview(), stereo, r);
       tracked += r.tracked;
     }
   }

@@ -2,6 +2,7 @@
 // skipped with a message when ../shared/data is absent), determinism, dense mode, bad input, the
 // first pair without a motion prior.
 #include "odometry/stereo_odometry.hpp"
+#include "odometry/stereo_stage.hpp"
 
 #include <gtest/gtest.h>
 
@@ -25,6 +26,25 @@ const std::string kData = SVSLAM_DATA_DIR;
 const std::string kKitti = kData + "/kitti_odometry_seq_a";
 const std::string kEuroc = kData + "/euroc_mh01_first320";
 
+// The stereo stage and the odometry on one pair, as the pipeline's two stages run them.
+struct Odometry {
+  Odometry(const StereoOdometryParams& p, const StereoCalibration& c) : stage(p, c), vo(p, c) {}
+  Status initStatus() const { return stage.initStatus() ? vo.initStatus() : stage.initStatus(); }
+  Status process(ImageView<const std::uint8_t> l, ImageView<const std::uint8_t> r,
+                 OdometryFrameResult& out, Executor& ex) {
+    if (Status s = frontEnd(l, r, out, ex); !s) return s;
+    return vo.estimateMotion(nullptr, out);
+  }
+  Status frontEnd(ImageView<const std::uint8_t> l, ImageView<const std::uint8_t> r,
+                  OdometryFrameResult& out, Executor& ex) {
+    if (Status s = stage.process(l, r, vo.feedback(), stereo, ex); !s) return s;
+    return vo.frontEnd(l, stereo, out);
+  }
+  StereoStage stage;
+  StereoStageOutput stereo;
+  StereoOdometry vo;
+};
+
 struct Track {
   drivers::TrajectoryFile traj;  // TUM-style, with stamps
   int tracked = 0;
@@ -35,7 +55,7 @@ Track runOdometry(const std::string& spec, const StereoOdometryParams& params, i
   auto src = drivers::openStereoSource(spec);
   EXPECT_TRUE(src.isOk()) << src.status().message();
   if (!src) return t;
-  StereoOdometry vo(params, (*src)->calibration());
+  Odometry vo(params, (*src)->calibration());
   EXPECT_TRUE(vo.initStatus().isOk()) << vo.initStatus().message();
   SerialExecutor ex;
   drivers::StereoFrame f;
@@ -131,7 +151,7 @@ TEST(StereoOdometry, DenseModeTracksKitti) {
 TEST(StereoOdometry, BadInput) {
   StereoCalibration c{700, 320, 240, 0.5, 640, 480};
   StereoOdometryParams p;
-  StereoOdometry vo(p, c);
+  Odometry vo(p, c);
   ASSERT_TRUE(vo.initStatus().isOk());
   ImageU8 small(320, 240), big(640, 480);
   SerialExecutor ex;
@@ -147,10 +167,10 @@ TEST(StereoOdometry, BadInput) {
 
   StereoCalibration nan_calib = c;
   nan_calib.f_px = std::nan("");
-  StereoOdometry bad(p, nan_calib);
+  Odometry bad(p, nan_calib);
   EXPECT_FALSE(bad.initStatus().isOk());
   p.stereo_match.ratio = 0;
-  StereoOdometry bad2(p, c);
+  Odometry bad2(p, c);
   EXPECT_NE(bad2.initStatus().message().find("ratio"), std::string::npos);
 }
 
@@ -176,14 +196,15 @@ TEST(StereoOdometry, RoiTrackingKeepsMatchPrecisionOnSyntheticFlight) {
   auto run = [&](bool roi) {
     StereoOdometryParams p;
     p.roi_tracking = roi;
-    StereoOdometry vo(p, calib);
-    EXPECT_TRUE(vo.initStatus().isOk());
+    Odometry odo(p, calib);
+    EXPECT_TRUE(odo.initStatus().isOk());
+    const StereoOdometry& vo = odo.vo;
     SerialExecutor ex;
     Score s;
     for (std::size_t i = 0; i < frames.size(); ++i) {
       OdometryFrameResult r;
       const auto t0 = std::chrono::steady_clock::now();
-      EXPECT_TRUE(vo.frontEnd(frames[i].left.cview(), frames[i].right.cview(), r, ex).isOk());
+      EXPECT_TRUE(odo.frontEnd(frames[i].left.cview(), frames[i].right.cview(), r, ex).isOk());
       s.ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       if (i > 0) {
         const Eigen::Isometry3d T_cur_prev =
@@ -203,7 +224,7 @@ TEST(StereoOdometry, RoiTrackingKeepsMatchPrecisionOnSyntheticFlight) {
           s.correct += std::hypot(u - b.u_px, v - b.v_px) < 1.5 ? 1 : 0;
         }
       }
-      EXPECT_TRUE(vo.estimateMotion(nullptr, r).isOk());
+      EXPECT_TRUE(odo.vo.estimateMotion(nullptr, r).isOk());
     }
     return s;
   };
@@ -222,15 +243,15 @@ TEST(StereoOdometry, RoiTrackingKeepsMatchPrecisionOnSyntheticFlight) {
 
 // The first pair has no measured motion to predict from: its temporal matching searches around
 // the identity as widely as a retry after a loss (lost_search_radius_px). On the full-size blimp
-// flight the camera moves about 22 px a frame; with the ordinary 30 px radius only ~310 of ~740
-// points matched, bunched where the motion was small, and the first step was 1.8 cm off along
-// the shift/tilt mode (seed 2; later steps 1-2 mm).
+// flight the camera moves about 22 px a frame; the ordinary 30 px radius matches only ~310 of
+// ~740 points, bunched where the motion is small, and leaves the first step 1.8 cm off along the
+// shift/tilt mode (seed 2; later steps 1-2 mm).
 TEST(StereoOdometry, FirstPairWithoutMotionPriorIsSearchedWidely) {
   auto src = drivers::openStereoSource("synthetic:seed=2,frames=100");
   ASSERT_TRUE(src.isOk()) << src.status().message();
   const drivers::SyntheticFlight* scene = drivers::asSyntheticFlight(**src);
   ASSERT_NE(scene, nullptr);
-  StereoOdometry vo(StereoOdometryParams{}, (*src)->calibration());
+  Odometry vo(StereoOdometryParams{}, (*src)->calibration());
   ASSERT_TRUE(vo.initStatus().isOk());
   SerialExecutor ex;
   int matches[3] = {0, 0, 0};

@@ -1,12 +1,15 @@
-// The stereo stage run apart (as the pipeline's stereo thread does) gives the odometry and the
-// SLAM system exactly the results of their own all-in-one processing: corners, ORB, dense prior
-// and ROI tracking (where detection stays in the odometry).
+// The stereo stage (dense stereo, points, ROIs, stereo matching, 3D points) as the pipeline runs
+// it: in two halves around the estimator's feedback, or in one call, with the same output; and
+// the estimators behind the one Estimator interface.
+#include "odometry/stereo_stage.hpp"
+
 #include <gtest/gtest.h>
 
 #include "drivers/source/stereo_source.hpp"
 #include "odometry/stereo_odometry.hpp"
-#include "odometry/stereo_stage.hpp"
+#include "slam/estimator.hpp"
 #include "slam/slam_system.hpp"
+#include "slam/vo_estimator.hpp"
 
 namespace svslam {
 namespace {
@@ -32,47 +35,55 @@ std::vector<Variant> variants() {
   return v;
 }
 
-TEST(StereoStage, SplitEqualsAllInOneForOdometryAndSlam) {
+bool samePoints(const std::vector<TrackPoint>& a, const std::vector<TrackPoint>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (a[i].u_px != b[i].u_px || a[i].v_px != b[i].v_px || a[i].p_cam != b[i].p_cam ||
+        a[i].cov != b[i].cov || a[i].d_px != b[i].d_px)
+      return false;
+  return true;
+}
+
+TEST(StereoStage, HalvesEqualOneCallAndRoisFollowTheFeedback) {
   for (const Variant& var : variants()) {
     auto src = drivers::openStereoSource("synthetic:width=384,height=288,frames=6");
     ASSERT_TRUE(src.isOk());
     const StereoCalibration calib = (*src)->calibration();
-    StereoOdometry whole(var.params, calib), split(var.params, calib);
-    SlamSystem slam_whole(SlamSystemParams{}, var.params, calib);
-    SlamSystem slam_split(SlamSystemParams{}, var.params, calib);
-    StereoStage stage(var.params, calib);
-    ASSERT_TRUE(whole.initStatus().isOk()) << var.name << ": " << whole.initStatus().message();
-    ASSERT_TRUE(stage.initStatus().isOk());
-    StereoStageOutput out;
+    StereoStage one(var.params, calib), halves(var.params, calib);
+    StereoOdometry vo(var.params, calib);
+    ASSERT_TRUE(one.initStatus().isOk()) << var.name << ": " << one.initStatus().message();
+    EXPECT_EQ(one.needsFeedback(), var.params.roi_tracking);
+    StereoStageOutput a, b;
     SerialExecutor ex;
     drivers::StereoFrame f;
-    int n = 0;
+    int n = 0, with_rois = 0;
     for (;;) {
       auto more = (*src)->next(f);
       ASSERT_TRUE(more.isOk());
       if (!more.value()) break;
       const auto l = f.left.cview(), r = f.right.cview();
-      ASSERT_TRUE(stage.process(l, r, out, ex).isOk());
-      EXPECT_EQ(out.matched, !var.params.roi_tracking) << var.name;
-      EXPECT_EQ(out.has_disparity, var.params.dense) << var.name;
-      OdometryFrameResult a, b;
-      ASSERT_TRUE(whole.process(l, r, a, ex).isOk());
-      ASSERT_TRUE(split.frontEnd(l, r, out, b, ex).isOk());
-      ASSERT_TRUE(split.estimateMotion(nullptr, b).isOk());
-      EXPECT_EQ(a.corners, b.corners) << var.name << " frame " << n;
-      EXPECT_EQ(a.stereo_points, b.stereo_points) << var.name;
-      EXPECT_EQ(a.temporal_matches, b.temporal_matches) << var.name;
-      EXPECT_TRUE(a.T_first_cam.matrix() == b.T_first_cam.matrix()) << var.name << " frame " << n;
-      EXPECT_TRUE(a.covariance == b.covariance) << var.name;
-      SlamFrameResult sa, sb;
-      ASSERT_TRUE(slam_whole.process(l, r, sa, ex).isOk());
-      ASSERT_TRUE(slam_split.process(l, r, out, sb, ex).isOk());
-      EXPECT_TRUE(sa.T_world_cam.matrix() == sb.T_world_cam.matrix()) << var.name << " " << n;
-      EXPECT_TRUE(sa.pose_cov == sb.pose_cov) << var.name;
-      EXPECT_EQ(sa.landmarks_in_state, sb.landmarks_in_state) << var.name;
+      const TrackingFeedback fb = vo.feedback();
+      EXPECT_EQ(fb.has_previous, n > 0) << var.name;
+      ASSERT_TRUE(one.process(l, r, fb, a, ex).isOk());
+      ASSERT_TRUE(halves.prepare(l, r, b, ex).isOk());
+      EXPECT_FALSE(b.finished);
+      ASSERT_TRUE(halves.finish(l, r, fb, b).isOk());
+      EXPECT_TRUE(a.finished && b.finished);
+      EXPECT_EQ(a.has_disparity, var.params.dense) << var.name;
+      EXPECT_EQ(a.corner_px, b.corner_px) << var.name << " frame " << n;
+      EXPECT_TRUE(samePoints(a.points, b.points)) << var.name << " frame " << n;
+      EXPECT_EQ(a.prev_regions, b.prev_regions) << var.name;
+      EXPECT_GT(a.points.size(), 50u) << var.name;
+      with_rois += a.has_rois ? 1 : 0;
+      OdometryFrameResult r_out;
+      ASSERT_TRUE(vo.process(l, a, r_out).isOk());
+      EXPECT_TRUE(r_out.tracked) << var.name << " frame " << n;
+      EXPECT_EQ(r_out.stereo_points, static_cast<int>(a.points.size()));
       ++n;
     }
     EXPECT_EQ(n, 6);
+    // ROIs from the second frame on (the first has no previous clusters), never without them.
+    EXPECT_EQ(with_rois, var.params.roi_tracking ? 5 : 0) << var.name;
   }
 }
 
@@ -84,18 +95,61 @@ TEST(StereoStage, RejectsWrongSizeAndMismatchedOutput) {
   ImageU8 small(128, 96);
   StereoStageOutput out;
   SerialExecutor ex;
-  EXPECT_FALSE(stage.process(small.cview(), small.cview(), out, ex).isOk());
-  // An output made without dense stereo given to a dense odometry: refused, not misused.
+  EXPECT_FALSE(stage.process(small.cview(), small.cview(), {}, out, ex).isOk());
   drivers::StereoFrame f;
   auto more = (*src)->next(f);
   ASSERT_TRUE(more.isOk() && more.value());
-  ASSERT_TRUE(stage.process(f.left.cview(), f.right.cview(), out, ex).isOk());
+  // Only the first half run: refused by the odometry, not misused.
+  ASSERT_TRUE(stage.prepare(f.left.cview(), f.right.cview(), out, ex).isOk());
+  StereoOdometry plain(StereoOdometryParams{}, calib);
+  OdometryFrameResult r;
+  EXPECT_FALSE(plain.frontEnd(f.left.cview(), out, r).isOk());
+  // An output made without dense stereo given to a dense odometry.
+  ASSERT_TRUE(stage.finish(f.left.cview(), f.right.cview(), {}, out).isOk());
+  EXPECT_TRUE(plain.frontEnd(f.left.cview(), out, r).isOk());
   StereoOdometryParams dense;
   dense.dense = true;
   dense.dense_stereo.max_disp = 64;
   StereoOdometry vo(dense, calib);
-  OdometryFrameResult r;
-  EXPECT_FALSE(vo.frontEnd(f.left.cview(), f.right.cview(), out, r, ex).isOk());
+  EXPECT_FALSE(vo.frontEnd(f.left.cview(), out, r).isOk());
+}
+
+// Both modes behind the one interface: what each produces, and the VO estimator is the odometry
+// (same poses as StereoOdometry driven by hand).
+TEST(Estimator, ModesBehindOneInterface) {
+  auto src = drivers::openStereoSource("synthetic:width=384,height=288,frames=5");
+  ASSERT_TRUE(src.isOk());
+  const StereoCalibration calib = (*src)->calibration();
+  const StereoOdometryParams p;
+  auto ekf = makeEstimator(EstimatorKind::kEkf, SlamSystemParams{}, p, calib);
+  auto vo = makeEstimator(EstimatorKind::kVo, SlamSystemParams{}, p, calib);
+  ASSERT_TRUE(ekf->initStatus().isOk() && vo->initStatus().isOk());
+  EXPECT_TRUE(ekf->outputs().pose_covariance && ekf->outputs().landmark_map);
+  EXPECT_FALSE(vo->outputs().pose_covariance || vo->outputs().landmark_map);
+  FrameByFrame run_ekf(p, calib, std::move(ekf)), run_vo(p, calib, std::move(vo));
+  StereoStage stage(p, calib);
+  StereoStageOutput st;
+  StereoOdometry by_hand(p, calib);
+  SerialExecutor ex;
+  drivers::StereoFrame f;
+  int n = 0;
+  while ((*src)->next(f).value()) {
+    const auto l = f.left.cview(), r = f.right.cview();
+    SlamFrameResult e, v;
+    ASSERT_TRUE(run_ekf.process(l, r, e, ex).isOk());
+    ASSERT_TRUE(run_vo.process(l, r, v, ex).isOk());
+    ASSERT_TRUE(stage.process(l, r, by_hand.feedback(), st, ex).isOk());
+    OdometryFrameResult h;
+    ASSERT_TRUE(by_hand.process(l, st, h).isOk());
+    EXPECT_TRUE(v.T_world_cam.matrix() == h.T_first_cam.matrix()) << "frame " << n;
+    EXPECT_TRUE(v.pose_cov == h.covariance);
+    EXPECT_EQ(v.landmarks_in_map, 0);
+    if (n > 0) EXPECT_GT(e.landmarks_in_state + e.candidates, 0);
+    EXPECT_LT((e.T_world_cam.translation() - v.T_world_cam.translation()).norm(), 0.05);
+    ++n;
+  }
+  EXPECT_EQ(n, 5);
+  EXPECT_TRUE(run_vo.estimator().map().empty());
 }
 
 }  // namespace

@@ -20,7 +20,7 @@
 #include "drivers/source/stereo_source.hpp"
 #include "pipeline/config/run_config.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
-#include "pipeline/realtime/stage_work.hpp"
+#include "pipeline/realtime/slam_stages.hpp"
 #include "pipeline/run/run_outputs.hpp"
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
@@ -85,10 +85,10 @@ namespace svslam::rt {
 namespace {
 
 // Work that touches every slot buffer but allocates nothing once the images have their size.
-class QuietWork : public PipelineWork {
+class QuietWork {
  public:
   QuietWork(int frames, int first, int last) : frames_(frames), first_(first), last_(last) {}
-  Result<bool> capture(FrameSlot& slot) override {
+  Result<bool> capture(FrameSlot& slot) {
     if (next_ >= frames_) return false;
     slot.frame.left.resize(64, 48);  // same size every time: no allocation once warm
     slot.frame.right.resize(64, 48);
@@ -96,21 +96,29 @@ class QuietWork : public PipelineWork {
     slot.frame.left.row(0)[0] = static_cast<std::uint8_t>(slot.frame.index);
     return true;
   }
-  Status stereo(FrameSlot& slot) override {
+  Status stereo(FrameSlot& slot) {
     slot.stereo.max_response = slot.frame.left.row(0)[0];
     return Status::ok();
   }
-  Status estimate(FrameSlot& slot) override {
+  Status estimate(FrameSlot& slot) {
     slot.result.landmarks_in_state = static_cast<int>(slot.stereo.max_response) + 1;
     return Status::ok();
   }
-  Status publish(FrameSlot& slot) override {
+  Status publish(FrameSlot& slot) {
     sum_ += slot.result.landmarks_in_state;
     // The first frames published at or after `first_` / `last_` (the newest-frame edge may
     // drop the exact ones).
     if (slot.frame.index >= first_ && at_first_ < 0) at_first_ = g_allocations.load();
     if (slot.frame.index >= last_ && at_last_ < 0) at_last_ = g_allocations.load();
     return Status::ok();
+  }
+  StageGraph graph(EdgePolicy capture_input) {
+    StageGraph g;
+    g.source = {"capture", [this](FrameSlot& s) { return capture(s); }};
+    g.stages = {{"stereo", [this](FrameSlot& s) { return stereo(s); }, capture_input},
+                {"estimator", [this](FrameSlot& s) { return estimate(s); }},
+                {"publisher", [this](FrameSlot& s) { return publish(s); }}};
+    return g;
   }
   std::int64_t at_first_ = -1, at_last_ = -1, sum_ = 0;
 
@@ -123,12 +131,11 @@ TEST(Allocations, PipelineMachineryAllocatesNothingPerFrame) {
     GTEST_SKIP() << "sanitizer build: the sanitizer's own operator new cannot be counted here";
   for (bool keep_newest : {false, true}) {
     PipelineOptions o;
-    o.keep_newest = keep_newest;
     QuietWork work(600, 100, 500);
+    PipelineRunner runner(
+        o, work.graph(keep_newest ? EdgePolicy::kNewest : EdgePolicy::kBlocking));
     std::vector<std::unique_ptr<FrameSlot>> slots;
-    for (int i = 0; i < PipelineRunner::slotsNeeded(o); ++i)
-      slots.push_back(std::make_unique<FrameSlot>());
-    PipelineRunner runner(o, work);
+    for (int i = 0; i < runner.slotsNeeded(); ++i) slots.push_back(std::make_unique<FrameSlot>());
     PipelineControl control;
     ASSERT_TRUE(runner.run(slots, control, nullptr).isOk());
     ASSERT_GE(work.at_first_, 0);
@@ -157,39 +164,45 @@ TEST(Allocations, StageTimesKeepTheNewestSamplesWithoutAllocating) {
       << merged.json();
 }
 
-// Wraps the real work, tags each stage's thread and takes the counts at two published frames.
-class CountingWork : public PipelineWork {
+// Wraps the stages of the real work, tags each stage's thread and takes the counts at two
+// published frames.
+class CountingWork {
  public:
   static constexpr int kStages = 5;
-  CountingWork(RunWork& w, int first, int last) : w_(w), first_(first), last_(last) {}
-  Result<bool> capture(FrameSlot& s) override {
-    t_stage = 1;
-    return w_.capture(s);
-  }
-  Status stereo(FrameSlot& s) override {
-    t_stage = 2;
-    return w_.stereo(s);
-  }
-  Status estimate(FrameSlot& s) override {
-    t_stage = 3;
-    return w_.estimate(s);
-  }
-  Status publish(FrameSlot& s) override {
-    t_stage = 4;
-    const Status st = w_.publish(s);
-    if (s.frame.index == first_) {
-      take(at_first_);
-      if (std::getenv("SVSLAM_ALLOC_TRACE")) {
-        void* warm[1];
-        backtrace(warm, 1);  // loads the unwinder before the window opens
-        g_trace = true;
+  CountingWork(int first, int last) : first_(first), last_(last) {}
+  StageGraph wrap(StageGraph g) {
+    auto read = g.source.read;
+    g.source.read = [read](FrameSlot& s) {
+      t_stage = 1;
+      return read(s);
+    };
+    for (std::size_t i = 0; i + 1 < g.stages.size(); ++i) {
+      auto work = g.stages[i].work;
+      const int tag = static_cast<int>(i) + 2;
+      g.stages[i].work = [work, tag](FrameSlot& s) {
+        t_stage = tag;
+        return work(s);
+      };
+    }
+    auto publish = g.stages.back().work;
+    g.stages.back().work = [this, publish](FrameSlot& s) {
+      t_stage = 4;
+      const Status st = publish(s);
+      if (s.frame.index == first_) {
+        take(at_first_);
+        if (std::getenv("SVSLAM_ALLOC_TRACE")) {
+          void* warm[1];
+          backtrace(warm, 1);  // loads the unwinder before the window opens
+          g_trace = true;
+        }
       }
-    }
-    if (s.frame.index == last_) {
-      take(at_last_);
-      g_trace = false;
-    }
-    return st;
+      if (s.frame.index == last_) {
+        take(at_last_);
+        g_trace = false;
+      }
+      return st;
+    };
+    return g;
   }
   std::int64_t inWindow(int stage) const { return at_last_[stage] - at_first_[stage]; }
   bool windowSeen() const { return at_first_[0] >= 0 && at_last_[0] >= 0; }
@@ -198,7 +211,6 @@ class CountingWork : public PipelineWork {
   void take(std::int64_t (&at)[kStages]) {
     for (int k = 0; k < kStages; ++k) at[k] = g_stage_allocations[k].load();
   }
-  RunWork& w_;
   int first_, last_;
   std::int64_t at_first_[kStages] = {-1, -1, -1, -1, -1};
   std::int64_t at_last_[kStages] = {-1, -1, -1, -1, -1};
@@ -226,15 +238,14 @@ TEST_P(FullWork, AllocatesNothingPerFrame) {
                            ("svslam_alloc_" + std::to_string(::getpid())))
                               .string();
   std::filesystem::create_directories(out);
-  RunWork work(cfg, **src, out, nullptr);
+  SlamStages work(cfg, **src, out, nullptr);
   ASSERT_TRUE(work.init().isOk());
-  CountingWork counting(work, kFirst, kLast);
+  CountingWork counting(kFirst, kLast);
   PipelineOptions o;
-  ASSERT_LT(PipelineRunner::slotsNeeded(o), kFirst);
+  PipelineRunner runner(o, counting.wrap(work.graph(EdgePolicy::kBlocking)));
+  ASSERT_LT(runner.slotsNeeded(), kFirst);
   std::vector<std::unique_ptr<FrameSlot>> slots;
-  for (int i = 0; i < PipelineRunner::slotsNeeded(o); ++i)
-    slots.push_back(std::make_unique<FrameSlot>());
-  PipelineRunner runner(o, counting);
+  for (int i = 0; i < runner.slotsNeeded(); ++i) slots.push_back(std::make_unique<FrameSlot>());
   PipelineControl control;
   ASSERT_TRUE(runner.run(slots, control, nullptr).isOk());
   const int frames = work.summary().frames, added = work.summary().added;

@@ -97,11 +97,11 @@ TEST(NewestEdge, ConcurrentProducerConsumerLoseNothingUncounted) {
 
 // A scripted pipeline: capture writes the frame number into the image, stereo derives a value
 // from it, estimate folds it into a running state (order-dependent), publish records it.
-class ScriptedWork : public PipelineWork {
+class ScriptedWork {
  public:
   explicit ScriptedWork(int frames, std::chrono::microseconds stereo_cost = 0us)
       : frames_(frames), stereo_cost_(stereo_cost) {}
-  Result<bool> capture(FrameSlot& slot) override {
+  Result<bool> capture(FrameSlot& slot) {
     if (next_ >= frames_) return false;
     if (capture_fail_at_ >= 0 && next_ == capture_fail_at_)
       return Status::corruptData("scripted unreadable frame");
@@ -112,20 +112,29 @@ class ScriptedWork : public PipelineWork {
     ++next_;
     return true;
   }
-  Status stereo(FrameSlot& slot) override {
+  Status stereo(FrameSlot& slot) {
     if (stereo_cost_.count() > 0) std::this_thread::sleep_for(stereo_cost_);
     slot.stereo.max_response = static_cast<float>(slot.frame.left.row(0)[0]) * 2.0f + 1.0f;
     return Status::ok();
   }
-  Status estimate(FrameSlot& slot) override {
+  Status estimate(FrameSlot& slot) {
     if (fail_at_ >= 0 && slot.frame.index == fail_at_) return Status::corruptData("scripted failure");
     state_ = state_ * 31 + static_cast<std::uint64_t>(slot.stereo.max_response);
     slot.result.landmarks_in_state = static_cast<int>(state_ & 0x7fffffff);
     return Status::ok();
   }
-  Status publish(FrameSlot& slot) override {
+  Status publish(FrameSlot& slot) {
     published_.push_back({slot.frame.index, slot.result.landmarks_in_state});
     return Status::ok();
+  }
+  // The four stages as a graph; `capture_input`: the policy of the edge capture -> stereo.
+  StageGraph graph(EdgePolicy capture_input = EdgePolicy::kBlocking) {
+    StageGraph g;
+    g.source = {"capture", [this](FrameSlot& s) { return capture(s); }};
+    g.stages = {{"stereo", [this](FrameSlot& s) { return stereo(s); }, capture_input},
+                {"estimator", [this](FrameSlot& s) { return estimate(s); }},
+                {"publisher", [this](FrameSlot& s) { return publish(s); }}};
+    return g;
   }
   int fail_at_ = -1;
   int capture_fail_at_ = -1;
@@ -138,18 +147,18 @@ class ScriptedWork : public PipelineWork {
   std::uint64_t state_ = 7;
 };
 
-std::vector<std::unique_ptr<FrameSlot>> makeSlots(const PipelineOptions& o) {
+std::vector<std::unique_ptr<FrameSlot>> makeSlots(const PipelineRunner& runner) {
   std::vector<std::unique_ptr<FrameSlot>> s;
-  for (int i = 0; i < PipelineRunner::slotsNeeded(o); ++i) s.push_back(std::make_unique<FrameSlot>());
+  for (int i = 0; i < runner.slotsNeeded(); ++i) s.push_back(std::make_unique<FrameSlot>());
   return s;
 }
 
 std::vector<std::pair<int, int>> runScripted(const PipelineOptions& o, int frames,
                                              PipelineReport* report = nullptr) {
   ScriptedWork work(frames);
-  PipelineRunner runner(o, work);
+  PipelineRunner runner(o, work.graph());
   PipelineControl control;
-  auto slots = makeSlots(o);
+  auto slots = makeSlots(runner);
   EXPECT_TRUE(runner.run(slots, control, nullptr).isOk());
   if (report) *report = runner.report();
   return work.published_;
@@ -171,16 +180,68 @@ TEST(PipelineRunner, ThreadedEqualsSequential) {
   EXPECT_EQ(rep.end_to_end.count, 500);
   ASSERT_EQ(rep.edges.size(), 3u);
   for (const EdgeReport& e : rep.edges) EXPECT_LE(e.max_depth, e.capacity) << e.name;
+  EXPECT_EQ(rep.edges[1].name, "stereo->estimator");
+  ASSERT_EQ(rep.stages.size(), 4u);  // the source and the three stages, each timed once
+  for (const StageReport& st : rep.stages) EXPECT_EQ(st.latency.count, 500) << st.name;
+}
+
+// A stage graph is data: any chain of stages runs, threaded as sequentially, and a later stage
+// can feed a value about each frame back to an earlier one (the estimator's motion for the
+// stereo stage's ROIs) without a lock.
+TEST(PipelineRunner, AnyChainWithFeedbackRunsThreadedAsSequential) {
+  auto run = [](bool sequential) {
+    std::int64_t next = 0, last_a = -1, state = 1;
+    FeedbackCell<std::int64_t> fb;
+    std::vector<std::int64_t> out;
+    StageGraph g;
+    g.source = {"src", [&](FrameSlot& s) -> Result<bool> {
+                  if (next >= 300) return false;
+                  s.frame.index = static_cast<int>(next++);
+                  return true;
+                }};
+    g.stages = {{"a", [&](FrameSlot& s) {  // needs stage c's value about the previous frame
+                   std::int64_t prev = 0;
+                   if (last_a >= 0 && !fb.wait(last_a, prev))
+                     return Status::failedPrecondition("closed");
+                   last_a = s.seq;
+                   s.result.observed = static_cast<int>((prev * 7 + s.frame.index) % 100003);
+                   return Status::ok();
+                 }},
+                {"b", [](FrameSlot& s) {
+                   s.result.gated = s.result.observed + 1;
+                   return Status::ok();
+                 }},
+                {"c", [&](FrameSlot& s) {
+                   state = (state * 31 + s.result.gated) % 1000003;
+                   fb.publish(s.seq, state);
+                   return Status::ok();
+                 }},
+                {"d", [&](FrameSlot& s) {
+                   out.push_back(s.result.gated);
+                   return Status::ok();
+                 }}};
+    PipelineOptions o;
+    o.sequential = sequential;
+    o.queue_capacity = 1;
+    PipelineRunner runner(o, std::move(g));
+    PipelineControl control;
+    auto slots = makeSlots(runner);
+    EXPECT_TRUE(runner.run(slots, control, nullptr).isOk());
+    EXPECT_EQ(runner.report().edges.size(), sequential ? 0u : 4u);
+    return out;
+  };
+  const auto a = run(true), b = run(false);
+  ASSERT_EQ(a.size(), 300u);
+  EXPECT_EQ(a, b);
 }
 
 TEST(PipelineRunner, NewestPolicyDropsAndCountsUnderASlowStage) {
   PipelineOptions o;
-  o.keep_newest = true;
   o.rate_hz = 1000.0;  // a frame every 1 ms, the stereo stage takes 4 ms
   ScriptedWork work(200, 4000us);
-  PipelineRunner runner(o, work);
+  PipelineRunner runner(o, work.graph(EdgePolicy::kNewest));
   PipelineControl control;
-  auto slots = makeSlots(o);
+  auto slots = makeSlots(runner);
   ASSERT_TRUE(runner.run(slots, control, nullptr).isOk());
   const PipelineReport& r = runner.report();
   EXPECT_EQ(r.captured, 200);
@@ -196,9 +257,9 @@ TEST(PipelineRunner, RatePacesCapture) {
   PipelineOptions o;
   o.rate_hz = 100.0;
   ScriptedWork work(21);
-  PipelineRunner runner(o, work);
+  PipelineRunner runner(o, work.graph());
   PipelineControl control;
-  auto slots = makeSlots(o);
+  auto slots = makeSlots(runner);
   const auto t0 = std::chrono::steady_clock::now();
   ASSERT_TRUE(runner.run(slots, control, nullptr).isOk());
   EXPECT_GE(std::chrono::steady_clock::now() - t0, 195ms);  // 20 periods of 10 ms
@@ -208,9 +269,9 @@ TEST(PipelineRunner, RatePacesCapture) {
 TEST(PipelineRunner, StopDrainsEveryFrameInFlight) {
   PipelineOptions o;
   ScriptedWork work(1000000, 200us);
-  PipelineRunner runner(o, work);
+  PipelineRunner runner(o, work.graph());
   PipelineControl control;
-  auto slots = makeSlots(o);
+  auto slots = makeSlots(runner);
   int ticks = 0;
   auto tick = [&] {
     if (++ticks == 5) control.stop = true;
@@ -229,9 +290,9 @@ TEST(PipelineRunner, StageErrorStopsTheRunAndIsReported) {
     o.sequential = sequential;
     ScriptedWork work(100);
     work.fail_at_ = 40;
-    PipelineRunner runner(o, work);
+    PipelineRunner runner(o, work.graph());
     PipelineControl control;
-    auto slots = makeSlots(o);
+    auto slots = makeSlots(runner);
     const Status s = runner.run(slots, control, nullptr);
     EXPECT_FALSE(s.isOk());
     EXPECT_NE(s.message().find("scripted failure"), std::string::npos);
@@ -248,9 +309,9 @@ TEST(PipelineRunner, CaptureErrorKeepsEveryFrameBeforeIt) {
     o.sequential = sequential;
     ScriptedWork work(100);
     work.capture_fail_at_ = 30;
-    PipelineRunner runner(o, work);
+    PipelineRunner runner(o, work.graph());
     PipelineControl control;
-    auto slots = makeSlots(o);
+    auto slots = makeSlots(runner);
     const Status s = runner.run(slots, control, nullptr);
     EXPECT_NE(s.message().find("scripted unreadable frame"), std::string::npos);
     ASSERT_EQ(work.published_.size(), 30u) << "sequential " << sequential;
@@ -261,11 +322,17 @@ TEST(PipelineRunner, CaptureErrorKeepsEveryFrameBeforeIt) {
 TEST(PipelineRunner, RejectsTooFewSlotsAndBadOptions) {
   PipelineOptions o;
   ScriptedWork work(3);
-  PipelineRunner runner(o, work);
+  PipelineRunner runner(o, work.graph());
   PipelineControl control;
   std::vector<std::unique_ptr<FrameSlot>> slots;
   slots.push_back(std::make_unique<FrameSlot>());
   EXPECT_FALSE(runner.run(slots, control, nullptr).isOk());
+  StageGraph no_stage;
+  no_stage.source = work.graph().source;
+  EXPECT_FALSE(no_stage.validate().isOk());
+  StageGraph late_newest = work.graph();
+  late_newest.stages[1].input = EdgePolicy::kNewest;  // a dropped slot could not get back
+  EXPECT_FALSE(late_newest.validate().isOk());
   PipelineOptions bad;
   bad.queue_capacity = 0;
   EXPECT_FALSE(bad.validate().isOk());
@@ -296,16 +363,22 @@ TEST(RunPipeline, ThreadedOutputsEqualSequentialOnAReplay) {
   const fs::path base = fs::temp_directory_path() / ("svslam_rt_" + std::to_string(::getpid()));
   const std::string src =
       "--source synthetic:width=512,height=384,frames=12 --max-frames 12";
-  for (const std::string mode : {"ekf", "vo"}) {
+  // ROI tracking: the stereo stage waits for the estimator's feedback on the previous frame.
+  fs::create_directories(base);
+  const fs::path roi_cfg = base / "roi.yaml";
+  std::ofstream(roi_cfg) << "odometry:\n  roi_tracking: true\n";
+  for (const std::string mode : {"ekf", "vo", "roi"}) {
     const fs::path a = base / (mode + "_threaded"), b = base / (mode + "_sequential");
-    ASSERT_EQ(runCli(src + " --mode " + mode, a), 0) << slurp(a / "stderr.txt");
-    ASSERT_EQ(runCli(src + " --mode " + mode + " --sequential", b), 0) << slurp(b / "stderr.txt");
+    const std::string args =
+        src + (mode == "roi" ? " --config " + roi_cfg.string() : " --mode " + mode);
+    ASSERT_EQ(runCli(args, a), 0) << slurp(a / "stderr.txt");
+    ASSERT_EQ(runCli(args + " --sequential", b), 0) << slurp(b / "stderr.txt");
     for (const char* f : {"trajectory_kitti.txt", "trajectory_tum.txt", "groundtruth_kitti.txt"}) {
       const std::string ta = slurp(a / f), tb = slurp(b / f);
       EXPECT_FALSE(ta.empty()) << f;
       EXPECT_EQ(ta, tb) << mode << " " << f;
     }
-    if (mode == "ekf") {
+    if (mode != "vo") {
       EXPECT_EQ(slurp(a / "pose_covariance.txt"), slurp(b / "pose_covariance.txt"));
       EXPECT_EQ(slurp(a / "landmarks.ply"), slurp(b / "landmarks.ply"));
     }

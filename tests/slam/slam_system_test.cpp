@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "drivers/source/stereo_source.hpp"
+#include "slam/vo_estimator.hpp"
 #include "drivers/files/trajectory_io.hpp"
 #include "eval/trajectory_metrics.hpp"
 
@@ -34,7 +35,9 @@ RunOut runSlam(const std::string& spec, const SlamSystemParams& sp, int max_fram
   auto src = drivers::openStereoSource(spec);
   EXPECT_TRUE(src.isOk()) << src.status().message();
   if (!src) return r;
-  SlamSystem slam(sp, StereoOdometryParams{}, (*src)->calibration());
+  const StereoCalibration calib = (*src)->calibration();
+  FrameByFrame slam(StereoOdometryParams{}, calib,
+                    std::make_unique<SlamSystem>(sp, StereoOdometryParams{}, calib));
   EXPECT_TRUE(slam.initStatus().isOk()) << slam.initStatus().message();
   SerialExecutor ex;
   drivers::StereoFrame f;
@@ -55,7 +58,7 @@ RunOut runSlam(const std::string& spec, const SlamSystemParams& sp, int max_fram
     Eigen::Isometry3d g;
     if ((*src)->groundTruth(f.index, g)) r.gt.push_back(g);
   }
-  r.map = slam.map();
+  r.map = slam.estimator().map();
   return r;
 }
 
@@ -65,15 +68,16 @@ std::vector<Eigen::Isometry3d> runVo(const std::string& spec) {
   auto src = drivers::openStereoSource(spec);
   EXPECT_TRUE(src.isOk());
   if (!src) return out;
-  StereoOdometry vo(StereoOdometryParams{}, (*src)->calibration());
+  const StereoCalibration calib = (*src)->calibration();
+  FrameByFrame vo(StereoOdometryParams{}, calib, std::make_unique<VoEstimator>(StereoOdometryParams{}, calib));
   SerialExecutor ex;
   drivers::StereoFrame f;
   while (true) {
     auto more = (*src)->next(f);
     if (!more || !*more) break;
-    OdometryFrameResult r;
+    SlamFrameResult r;
     EXPECT_TRUE(vo.process(f.left.cview(), f.right.cview(), r, ex).isOk());
-    out.push_back(r.T_first_cam);
+    out.push_back(r.T_world_cam);
   }
   return out;
 }
@@ -222,7 +226,8 @@ TEST(SlamSystem, BadParamsAndInput) {
   StereoCalibration c{500, 160, 120, 0.5, 320, 240};
   SlamSystem bad(p, StereoOdometryParams{}, c);
   EXPECT_NE(bad.initStatus().message().find("candidate_fraction"), std::string::npos);
-  SlamSystem ok(SlamSystemParams{}, StereoOdometryParams{}, c);
+  FrameByFrame ok(StereoOdometryParams{}, c,
+                  std::make_unique<SlamSystem>(SlamSystemParams{}, StereoOdometryParams{}, c));
   ASSERT_TRUE(ok.initStatus().isOk());
   ImageU8 small(100, 100);
   SlamFrameResult out;
