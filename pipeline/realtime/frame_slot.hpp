@@ -17,7 +17,7 @@ namespace svslam::rt {
 // Steady-clock times (ns since the clock's epoch) of one frame's passage.
 struct FrameStamps {
   static constexpr int kMaxStages = 8;  // processing stages after the source
-  std::int64_t capture_ns = 0;   // capture instant: when due (paced replay), else when in memory
+  std::int64_t capture_ns = 0;     // capture instant: when due (paced replay), else when in memory
   std::int64_t read_start_ns = 0;  // the source's read began
   std::int64_t captured_ns = 0;    // pair in memory
   std::array<std::int64_t, kMaxStages> start_ns{}, end_ns{};  // per stage of the graph

@@ -117,8 +117,9 @@ Status StageGraph::validate() const {
     return Status::invalidArgument("pipeline: 1 to " + std::to_string(FrameStamps::kMaxStages) +
                                    " stages after the source");
   for (std::size_t i = 0; i < stages.size(); ++i) {
-    if (!stages[i].work) return Status::invalidArgument("pipeline: stage '" + stages[i].name +
-                                                        "' has no work function");
+    if (!stages[i].work)
+      return Status::invalidArgument("pipeline: stage '" + stages[i].name +
+                                     "' has no work function");
     // A displaced slot goes back to the source: only the source can take it.
     if (i > 0 && stages[i].input == EdgePolicy::kNewest)
       return Status::invalidArgument("pipeline: stage '" + stages[i].name +
@@ -174,9 +175,8 @@ int PipelineRunner::slotsNeeded(const PipelineOptions& o, const StageGraph& g) {
   return n;
 }
 
-Status PipelineRunner::run(std::vector<std::unique_ptr<FrameSlot>>& slots,
-                           PipelineControl& control, const std::function<void()>& tick,
-                           int tick_ms) {
+Status PipelineRunner::run(std::vector<std::unique_ptr<FrameSlot>>& slots, PipelineControl& control,
+                           const std::function<void()>& tick, int tick_ms) {
   if (Status s = options_.validate(); !s) return s;
   if (Status s = graph_.validate(); !s) return s;
   if (static_cast<int>(slots.size()) < slotsNeeded())
@@ -207,8 +207,7 @@ void PipelineRunner::finishReport() {
 }
 
 Status PipelineRunner::runSequential(std::vector<std::unique_ptr<FrameSlot>>& slots,
-                                     PipelineControl& control,
-                                     const std::function<void()>& tick) {
+                                     PipelineControl& control, const std::function<void()>& tick) {
   FrameSlot& slot = *slots.front();
   Capture capture(graph_.source, options_.rate_hz, control, captured_);
   if (graph_.on_thread_start) graph_.on_thread_start("pipeline");

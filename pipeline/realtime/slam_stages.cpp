@@ -47,8 +47,8 @@ Status SlamStages::init() {
   }
   stereo_clock_ = std::make_unique<Clock>(stereo_times_);
   estimator_clock_ = std::make_unique<Clock>(estimator_times_);
-  publisher_ = std::make_unique<run::RunPublisher>(cfg_, out_dir_, estimator_->outputs(), lcm_,
-                                                   captured_);
+  publisher_ =
+      std::make_unique<run::RunPublisher>(cfg_, out_dir_, estimator_->outputs(), lcm_, captured_);
   Eigen::Isometry3d T;
   return publisher_->open(source_.groundTruth(0, T));
 }
@@ -103,8 +103,8 @@ Result<bool> SlamStages::capture(FrameSlot& slot) {
 Status SlamStages::stereo(FrameSlot& slot) {
   stereo_clock_->start();
   const auto left = slot.frame.left.cview(), right = slot.frame.right.cview();
-  if (Status s = stereo_stage_->prepare(left, right, slot.stereo, *stereo_executor_,
-                                        stereo_clock_.get());
+  if (Status s =
+          stereo_stage_->prepare(left, right, slot.stereo, *stereo_executor_, stereo_clock_.get());
       !s)
     return s;
   TrackingFeedback fb;  // no ROIs before the first frame
@@ -181,8 +181,8 @@ void SlamStages::applySaveMap(TimeNs t_ns) {
 Status SlamStages::writeMap(const std::string& path) {
   std::vector<run::PlyLandmark> ply;
   for (const MapLandmark& m : estimator_->map())
-    ply.push_back({m.id, m.p_world, m.cov.diagonal().cwiseMax(0.0).cwiseSqrt(), m.active,
-                   m.observations});
+    ply.push_back(
+        {m.id, m.p_world, m.cov.diagonal().cwiseMax(0.0).cwiseSqrt(), m.active, m.observations});
   return run::writeLandmarksPly(path, ply);
 }
 

@@ -22,9 +22,8 @@ namespace svslam::run {
 class RunPublisher {
  public:
   // `lcm` (may be null) and `captured` (frames read so far) outlive this object.
-  RunPublisher(const config::RunConfig& cfg, const std::string& out_dir,
-               EstimatorOutputs outputs, drivers::LcmLink* lcm,
-               const std::atomic<std::int64_t>& captured);
+  RunPublisher(const config::RunConfig& cfg, const std::string& out_dir, EstimatorOutputs outputs,
+               drivers::LcmLink* lcm, const std::atomic<std::int64_t>& captured);
   // Opens the files; `ground_truth`: the source knows the true poses.
   Status open(bool ground_truth);
   Status publish(const rt::FrameSlot& slot);

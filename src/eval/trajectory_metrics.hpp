@@ -55,10 +55,11 @@ Result<TrajectoryMetrics> evaluateTrajectory(const std::vector<Eigen::Isometry3d
                                              const std::vector<Eigen::Isometry3d>& est,
                                              const TrajectoryEvalParams& params);
 
-// Consistency of an estimate that comes with pose covariances (seed 001: "absolute errors all
-// bounded by twice the estimated standard deviations"). Both trajectories are taken relative to
-// their first pose (the filter starts there with zero covariance). The error of pose i, in the
-// filter's error-state convention (left perturbation in the world frame, [rot rad, trans m]):
+// Consistency of an estimate that comes with pose covariances (seed 001 sec 5.1: "absolute
+// errors all bounded by twice the estimated standard deviations"). Both trajectories are taken
+// relative to their first pose (the filter starts there with zero covariance). The error of pose
+// i, in the filter's error-state convention (left perturbation in the world frame,
+// [rot rad, trans m]):
 //     e = [log(R_gt R_est^T), t_gt - t_est],   NEES_i = e^T P_i^-1 e  (6 dof).
 // Frames whose covariance is not positive definite (the first) are skipped.
 struct NeesResult {

@@ -40,8 +40,8 @@
 //   angle = atan2(m01, m10)   radians, image axes (x right, y down; positive = clockwise on
 //                             screen), in (-pi, pi].
 // The moments are taken about the integer pixel, as in ORB: taking them about the sub-pixel
-// position (m10 - dx m00, ...) was tried and made the angle less repeatable, because m00 is large
-// and the sub-pixel offsets of FAST maxima are noisy.
+// position (m10 - dx m00, ...) makes the angle less repeatable, because m00 is large and the
+// sub-pixel offsets of FAST maxima are noisy.
 //
 // Descriptor (rBRIEF). 256 point pairs (p_j, q_j), integer offsets drawn once from an isotropic
 // Gaussian N(0, (31/5)^2 px^2) (BRIEF's G II sampling) with a SplitMix64 generator seeded by

@@ -1,4 +1,4 @@
-// OrbExtractor's scale-space part (seed 002 sec 2.1, BRISK-style): FAST scores computed lazily
+// OrbExtractor's scale-space part (seed 002 sec 2.2.1, BRISK-style): FAST scores computed lazily
 // per layer, bilinear sampling of a neighbouring layer's scores, and the 3x3x3 non-maximum
 // suppression with quadratic refinement in position and scale.
 #include <algorithm>

@@ -33,7 +33,7 @@ struct StereoOdometryParams {
   double unknown_threshold_factor = 0.25;  // (0, 1]
   bool dense = false;  // dense stereo for the prior and the 8-neighbour observation
   DenseStereoParams dense_stereo;
-  double match_sigma_px = 0.5;  // matching error between consecutive frames, px (seed: 0.5)
+  double match_sigma_px = 0.5;  // matching error between consecutive frames, px (seed 001 sec 4.1)
   double min_disparity_px = 1.0;  // points with a smaller disparity are not used, px, > 0
   double max_depth_m = 1e9;       // points farther than this are not used, m, > 0
   int min_matches = 12;           // temporal matches needed before a retry, >= 3

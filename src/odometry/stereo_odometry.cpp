@@ -9,7 +9,6 @@
 
 namespace svslam {
 
-
 StereoOdometry::StereoOdometry(const StereoOdometryParams& params, const StereoCalibration& calib)
     : params_(params),
       calib_(calib),
@@ -47,23 +46,21 @@ TrackingFeedback StereoOdometry::feedback() const {
 bool StereoOdometry::observe(const TrackPoint& p, double matching_error_px,
                              StereoPoint& out) const {
   if (disp_)
-    return neighbourhoodPoint(disp_->disparity_px.cview(), disp_->sigma_d_px.cview(),
-                              calib_, p.u_px, p.v_px, matching_error_px, 5, out);
+    return neighbourhoodPoint(disp_->disparity_px.cview(), disp_->sigma_d_px.cview(), calib_,
+                              p.u_px, p.v_px, matching_error_px, 5, out);
   if (!(p.d_px > 0.0f)) return false;
   out = reprojectPixel(calib_, p.u_px, p.v_px, p.d_px, p.sigma_d_px, matching_error_px);
   return out.p_cam.allFinite() && out.cov.allFinite();
 }
 
-Status StereoOdometry::process(ImageView<const std::uint8_t> left,
-                               const StereoStageOutput& stereo, OdometryFrameResult& out,
-                               StageObserver* observer) {
+Status StereoOdometry::process(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,
+                               OdometryFrameResult& out, StageObserver* observer) {
   if (Status s = frontEnd(left, stereo, out, observer); !s) return s;
   return estimateMotion(nullptr, out, observer);
 }
 
-Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left,
-                                const StereoStageOutput& stereo, OdometryFrameResult& out,
-                                StageObserver* observer) {
+Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,
+                                OdometryFrameResult& out, StageObserver* observer) {
   if (!init_status_) return init_status_;
   if (left.width != calib_.width || left.height != calib_.height)
     return Status::invalidArgument("odometry: image size differs from the calibration's");

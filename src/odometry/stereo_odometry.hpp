@@ -36,8 +36,8 @@ namespace svslam {
 
 struct OdometryFrameResult {
   int frame = 0;
-  bool tracked = false;    // the motion was estimated from this frame's matches
-  std::string failure;     // why not, when !tracked (empty for the first frame)
+  bool tracked = false;  // the motion was estimated from this frame's matches
+  std::string failure;   // why not, when !tracked (empty for the first frame)
   Eigen::Isometry3d T_cur_prev = Eigen::Isometry3d::Identity();
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();  // [rot, trans]
   Eigen::Isometry3d T_first_cam = Eigen::Isometry3d::Identity();

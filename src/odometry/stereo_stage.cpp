@@ -62,16 +62,15 @@ StereoStage::StereoStage(const StereoOdometryParams& params, const StereoCalibra
 
 StereoStage::~StereoStage() = default;
 
-Status StereoStage::process(ImageView<const std::uint8_t> left,
-                            ImageView<const std::uint8_t> right, const TrackingFeedback& feedback,
-                            StereoStageOutput& out, Executor& executor, StageObserver* observer) {
+Status StereoStage::process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                            const TrackingFeedback& feedback, StereoStageOutput& out,
+                            Executor& executor, StageObserver* observer) {
   if (Status s = prepare(left, right, out, executor, observer); !s) return s;
   return finish(left, right, feedback, out, observer);
 }
 
-Status StereoStage::prepare(ImageView<const std::uint8_t> left,
-                            ImageView<const std::uint8_t> right, StereoStageOutput& out,
-                            Executor& executor, StageObserver* observer) {
+Status StereoStage::prepare(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                            StereoStageOutput& out, Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;
   if (left.width != calib_.width || left.height != calib_.height || right.width != calib_.width ||
       right.height != calib_.height)
@@ -105,9 +104,9 @@ Status StereoStage::prepare(ImageView<const std::uint8_t> left,
   return Status::ok();
 }
 
-Status StereoStage::finish(ImageView<const std::uint8_t> left,
-                           ImageView<const std::uint8_t> right, const TrackingFeedback& feedback,
-                           StereoStageOutput& out, StageObserver* observer) {
+Status StereoStage::finish(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                           const TrackingFeedback& feedback, StereoStageOutput& out,
+                           StageObserver* observer) {
   if (!init_status_) return init_status_;
   if (clusterer_) {  // the last frame's clusters become the previous ones
     prev_clusters_.swap(cur_clusters_);
@@ -134,14 +133,14 @@ Status StereoStage::finish(ImageView<const std::uint8_t> left,
 void StereoStage::buildPoints(StereoStageOutput& out) const {
   out.points.clear();
   const DisparityResult* disp = out.has_disparity ? &out.disparity : nullptr;
-  const double min_d = std::max(params_.min_disparity_px,
-                                calib_.f_px * calib_.baseline_m / params_.max_depth_m);
+  const double min_d =
+      std::max(params_.min_disparity_px, calib_.f_px * calib_.baseline_m / params_.max_depth_m);
   for (const StereoMatch& m : out.stereo) {
     if (!(m.d_px >= min_d)) continue;
     StereoPoint sp;
     if (disp) {
-      if (!neighbourhoodPoint(disp->disparity_px.cview(), disp->sigma_d_px.cview(), calib_,
-                              m.u_px, m.v_px, params_.match_sigma_px, 5, sp))
+      if (!neighbourhoodPoint(disp->disparity_px.cview(), disp->sigma_d_px.cview(), calib_, m.u_px,
+                              m.v_px, params_.match_sigma_px, 5, sp))
         continue;
     } else {
       sp = reprojectPixel(calib_, m.u_px, m.v_px, m.d_px, m.sigma_d_px, params_.match_sigma_px);

@@ -45,15 +45,15 @@ struct TrackingFeedback {
 
 // The product of the stereo stage for one pair. Buffers are reused from frame to frame.
 struct StereoStageOutput {
-  bool has_disparity = false;  // dense stereo ran (params.dense)
-  DisparityResult disparity;   // left-image disparity and sigma_d, px
-  bool finished = false;       // steps 3-6 ran
+  bool has_disparity = false;              // dense stereo ran (params.dense)
+  DisparityResult disparity;               // left-image disparity and sigma_d, px
+  bool finished = false;                   // steps 3-6 ran
   std::vector<Eigen::Vector2f> corner_px;  // detected points (after the ROI filter), left, px
   std::vector<float> corner_resp;          // their detector responses
   float max_response = 0.0f;               // strongest corner response of the image (Harris)
   std::vector<StereoMatch> stereo;         // stereo matches of the points
   StereoMatchStats stereo_stats;
-  std::vector<TrackPoint> points;          // step 5, left camera frame
+  std::vector<TrackPoint> points;  // step 5, left camera frame
   // ROI tracking (step 3).
   bool has_rois = false;    // ROIs were applied to this frame
   int rois = 0;             // cluster regions used
@@ -98,7 +98,7 @@ class StereoStage {
   // Step 3: filters out.corner_px by the ROIs of the previous clusters moved by T_cur_prev;
   // fills ranges_ and out.prev_regions.
   void applyRois(const Eigen::Isometry3d& T_cur_prev, StereoStageOutput& out);
-  void buildPoints(StereoStageOutput& out) const;  // step 5
+  void buildPoints(StereoStageOutput& out) const;      // step 5
   Status clusterPoints(const StereoStageOutput& out);  // step 6
 
   StereoOdometryParams params_;

@@ -12,13 +12,13 @@
 // (R <- exp([dtheta]x) R, t <- t + dt, m_i <- m_i + dm_i) and P is kept as it is: the reset
 // Jacobian of the injection is I + O(|dtheta|), dropped to first order (as the rest of the EKF).
 //
-// Prediction (seed eq. 1) from the VME result u = T_cur_prev with covariance R_u in the VME
-// convention (left perturbation, [dtheta_u, dt_u]): T_wc <- T_wc * T_cur_prev^-1,
+// Prediction (seed 001 sec 4, eq. 1) from the VME result u = T_cur_prev with covariance R_u in
+// the VME convention (left perturbation, [dtheta_u, dt_u]): T_wc <- T_wc * T_cur_prev^-1,
 //     P_pp <- F_x P_pp F_x^T + F_u R_u F_u^T,   P_pm <- F_x P_pm,   P_mm unchanged
 // (landmarks stationary, no extra process noise; F_x, F_u in slam/pose_jacobians.hpp).
 //
-// Observation of landmark i (seed eqs. 2-3): z_i = R_wc^T (m_i - t_wc), its position in the
-// current camera frame measured by stereo with covariance R_i. Innovation nu = z - h(x),
+// Observation of landmark i (seed 001 sec 4, eqs. 2-3): z_i = R_wc^T (m_i - t_wc), its position
+// in the current camera frame measured by stereo with covariance R_i. Innovation nu = z - h(x),
 // H = [H_pose 0 .. H_m 0 ..] (3 x n, sparse), S = H P H^T + R_i. Every observation of a call is
 // gated on the Mahalanobis distance d^2 = nu^T S^-1 nu against gate_chi2, all against the state
 // before the call (before any update); gated ones are reported and not applied. The accepted
@@ -39,7 +39,7 @@
 // reference, so the filter gives the same bits on every backend); on a CPU without hardware FMA,
 // Eigen's products instead.
 //
-// Landmark initialisation (seed eqs. 4-5): m = g(x_p, z) = R_wc z + t_wc,
+// Landmark initialisation (seed 001 sec 4, eqs. 4-5): m = g(x_p, z) = R_wc z + t_wc,
 //     P_mm = G_x P_pp G_x^T + G_z R_z G_z^T,   P_m,x = G_x [P_pp P_p,m_1 .. P_p,m_N].
 // Removal (retirement) deletes the landmark's rows and columns (the last landmark takes its
 // place in the state) and returns its final position and 3x3 covariance.

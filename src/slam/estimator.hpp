@@ -61,8 +61,8 @@ class Estimator {
   // and unchanged until the next call). `out` is overwritten. The executor splits the work that
   // splits (results do not depend on it); `observer` hears the sub-stages.
   virtual Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                         const StereoStageOutput& stereo, SlamFrameResult& out,
-                         Executor& executor, StageObserver* observer = nullptr) = 0;
+                         const StereoStageOutput& stereo, SlamFrameResult& out, Executor& executor,
+                         StageObserver* observer = nullptr) = 0;
   // For the stereo stage of the next frame.
   virtual TrackingFeedback feedback() const = 0;
   // Every landmark ever initialised (empty without a landmark map).

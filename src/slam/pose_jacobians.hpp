@@ -14,14 +14,15 @@
 //
 // Models and Jacobians (derived to first order in the errors; tested against numerical
 // differentiation in tests/slam/ekf_slam_test.cpp):
-//  Prediction (seed eq. 1): T_new = T_world_cam * T_cur_prev^-1, i.e. with u = [R_u | t_u]
+//  Prediction (seed 001 sec 4, eq. 1): T_new = T_world_cam * T_cur_prev^-1, i.e. with
+//  u = [R_u | t_u]
 //     R_new = R R_u^T,   t_new = t - R_new t_u.
 //   new pose error = F_x * old pose error + F_u * motion error, with a = R_new t_u:
 //     F_x = [ I      0 ]        F_u = [ -R_new            0      ]
 //           [ [a]x   I ]              [ -R_new [t_u]x    -R_new  ]
 //  Observation of landmark m (world, m): z = h(T, m) = R^T (m - t)  (camera frame, m):
 //     dz = H_pose [dtheta; dt] + H_m dm,  H_pose = [ R^T [m - t]x , -R^T ],  H_m = R^T.
-//  Landmark initialisation (seed eq. 4): m = g(T, z) = R z + t:
+//  Landmark initialisation (seed 001 sec 4, eq. 4): m = g(T, z) = R z + t:
 //     dm = G_x [dtheta; dt] + G_z dz,     G_x = [ -[R z]x , I ],           G_z = R.
 #include <Eigen/Core>
 #include <Eigen/Geometry>

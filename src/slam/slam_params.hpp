@@ -15,9 +15,10 @@ struct SlamSystemParams {
   int max_per_cell = 3;                  // landmarks + candidates per cell and frame, >= 1
   double init_sigma_uv_px = 0.25;        // image-plane localisation at initialisation, px, > 0
   double track_matching_error_px = 0.5;  // consecutive frames (seed 001 sec 4.1)
-  double reperception_matching_error_px = 1.0;  // re-perceiving after a loop (seed: 1 px)
-  double track_tolerance_px = 1.5;              // consecutive frames (seed: 1.5 px)
-  double reperception_tolerance_px = 2.5;       // (seed: about 2.5 px)
+  // re-perceiving after a loop (seed 001 sec 4.1: 1 px)
+  double reperception_matching_error_px = 1.0;
+  double track_tolerance_px = 1.5;              // consecutive frames (seed 001 sec 4.1: 1.5 px)
+  double reperception_tolerance_px = 2.5;       // (seed 001 sec 4.1: about 2.5 px)
   int max_reperceptions = 10;                   // re-perception searches per frame, >= 0
   int max_observations = 60;  // landmark observations per frame, >= 1: seed 001 updates with
                               // every landmark matched; this only bounds the update cost

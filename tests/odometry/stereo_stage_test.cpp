@@ -144,7 +144,9 @@ TEST(Estimator, ModesBehindOneInterface) {
     EXPECT_TRUE(v.T_world_cam.matrix() == h.T_first_cam.matrix()) << "frame " << n;
     EXPECT_TRUE(v.pose_cov == h.covariance);
     EXPECT_EQ(v.landmarks_in_map, 0);
-    if (n > 0) EXPECT_GT(e.landmarks_in_state + e.candidates, 0);
+    if (n > 0) {
+      EXPECT_GT(e.landmarks_in_state + e.candidates, 0);
+    }
     EXPECT_LT((e.T_world_cam.translation() - v.T_world_cam.translation()).norm(), 0.05);
     ++n;
   }

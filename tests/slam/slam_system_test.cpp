@@ -69,7 +69,8 @@ std::vector<Eigen::Isometry3d> runVo(const std::string& spec) {
   EXPECT_TRUE(src.isOk());
   if (!src) return out;
   const StereoCalibration calib = (*src)->calibration();
-  FrameByFrame vo(StereoOdometryParams{}, calib, std::make_unique<VoEstimator>(StereoOdometryParams{}, calib));
+  FrameByFrame vo(StereoOdometryParams{}, calib,
+                  std::make_unique<VoEstimator>(StereoOdometryParams{}, calib));
   SerialExecutor ex;
   drivers::StereoFrame f;
   while (true) {
@@ -128,10 +129,10 @@ TEST(SlamSystem, SyntheticBlimpLoopWithinTargetsAndBetterThanOdometry) {
       r.max_in_state, r.reperceived, r.restored, trace_max, trace_end);
   EXPECT_LE(e_slam, 0.15);
   EXPECT_LE(att_slam, 0.5);
-  // The 3x better than odometry at the end of the loop. Measured on this seed (session
-  // 10: first-frame anchors brought back on the loop, the odometry's first pair searched
-  // widely): final 0.0039 m against 0.0260 m (6.7x), rms over the frames 0.0101 m against
-  // 0.0283 m (2.8x); over seeds 1-6 the final-frame ratio ranges 2.4-29 (docs/slam.md).
+  // 3x better than odometry at the end of the loop. Measured on this seed (first-frame anchors
+  // brought back on the loop, the odometry's first pair searched widely): final 0.0039 m
+  // against 0.0260 m (6.7x), rms over the frames 0.0101 m against 0.0283 m (2.8x); over seeds
+  // 1-6 the final-frame ratio ranges 2.4-29 (docs/slam.md).
   EXPECT_LE(e_slam * 3.0, e_vo);
   EXPECT_LE(rms_slam * 2.0, rms_vo);
   // The loop closes on the first frame's landmarks: they come back into the state and the
