@@ -16,6 +16,7 @@
 #include <random>
 #include <string>
 
+#include "frame_reporter.hpp"
 #include "motion/visual_motion.hpp"
 #include "pipeline/thread_pool_executor.hpp"
 #include "simd/matrix_kernels.hpp"
@@ -234,17 +235,9 @@ BENCHMARK(BM_Ekf_svslam_default)
 BENCHMARK(BM_Ekf_dense_reference)->Arg(30)->Unit(benchmark::kMillisecond)->Iterations(5);
 
 // Prints ms per frame and the ratios svslam / dense reference at the end.
-class FrameReporter : public benchmark::ConsoleReporter {
+class FrameReporter : public svslam::bench::FrameReporter {
  public:
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const Run& r : runs) {
-      if (r.run_type != Run::RT_Iteration || r.error_occurred) continue;
-      const auto it = r.counters.find("frames");
-      if (it == r.counters.end() || it->second.value <= 0) continue;
-      per_frame_ms_[r.benchmark_name()] = r.GetAdjustedRealTime();  // unit: ms per iteration
-    }
-    ConsoleReporter::ReportRuns(runs);
-  }
+  FrameReporter() : svslam::bench::FrameReporter(Frames::kOnePerIteration) {}
   void Finalize() override {
     ConsoleReporter::Finalize();
     std::printf(
@@ -267,17 +260,8 @@ class FrameReporter : public benchmark::ConsoleReporter {
       std::printf("\n");
     }
   }
-
- private:
-  std::map<std::string, double> per_frame_ms_;
 };
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  FrameReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-  benchmark::Shutdown();
-  return 0;
-}
+int main(int argc, char** argv) { return svslam::bench::benchmarkMain<FrameReporter>(argc, argv); }

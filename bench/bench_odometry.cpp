@@ -6,9 +6,9 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
-#include <map>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 #include <string>
@@ -16,6 +16,7 @@
 
 #include "drivers/files/opencv_view.hpp"
 #include "drivers/source/stereo_source.hpp"
+#include "frame_reporter.hpp"
 #include "odometry/stereo_odometry.hpp"
 #include "odometry/stereo_stage.hpp"
 
@@ -146,18 +147,9 @@ BENCHMARK(BM_FrontEnd_svslam)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_FrontEnd_opencv_orb)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 // Prints per-frame times and the ratio svslam / OpenCV at the end.
-class FrameReporter : public benchmark::ConsoleReporter {
+class FrameReporter : public svslam::bench::FrameReporter {
  public:
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const Run& r : runs) {
-      if (r.run_type != Run::RT_Iteration || r.error_occurred) continue;
-      const auto it = r.counters.find("frames");
-      if (it == r.counters.end() || it->second.value <= 0) continue;
-      const double ms = r.GetAdjustedRealTime() / it->second.value;  // unit: ms per iteration
-      per_frame_ms_[r.benchmark_name()] = ms;
-    }
-    ConsoleReporter::ReportRuns(runs);
-  }
+  FrameReporter() : svslam::bench::FrameReporter(Frames::kPerIteration) {}
   void Finalize() override {
     ConsoleReporter::Finalize();
     const auto a = per_frame_ms_.find("BM_FrontEnd_svslam/min_time:2.000");
@@ -169,17 +161,8 @@ class FrameReporter : public benchmark::ConsoleReporter {
     if (a != per_frame_ms_.end() && b != per_frame_ms_.end())
       std::printf("  ratio svslam / OpenCV ORB reference: %.2f\n", a->second / b->second);
   }
-
- private:
-  std::map<std::string, double> per_frame_ms_;
 };
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  FrameReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-  benchmark::Shutdown();
-  return 0;
-}
+int main(int argc, char** argv) { return svslam::bench::benchmarkMain<FrameReporter>(argc, argv); }

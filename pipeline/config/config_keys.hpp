@@ -98,37 +98,31 @@ ConfigKey number(std::string name, F field, double lo, double hi, std::string un
   return k;
 }
 
-template <typename F>
-ConfigKey flag(std::string name, F field, std::string doc) {
-  ConfigKey k{std::move(name), "", "", std::move(doc), {}, {}};
+// A key whose value is a plain YAML scalar of type T: field(c) must yield a T&.
+template <typename T, typename F>
+ConfigKey plain(std::string name, F field, std::string range, std::string doc) {
+  ConfigKey k{std::move(name), "", std::move(range), std::move(doc), {}, {}};
   k.read = [field](ConfigReader& r, const std::string& key, RunConfig& c) {
-    bool& v = field(c);
+    T& v = field(c);
     return r.read(key, v);
   };
   k.value = [field](const RunConfig& c) { return formatValue(field(c)); };
   return k;
+}
+
+template <typename F>
+ConfigKey flag(std::string name, F field, std::string doc) {
+  return plain<bool>(std::move(name), field, "", std::move(doc));
 }
 
 template <typename F>
 ConfigKey text(std::string name, F field, std::string doc) {
-  ConfigKey k{std::move(name), "", "", std::move(doc), {}, {}};
-  k.read = [field](ConfigReader& r, const std::string& key, RunConfig& c) {
-    std::string& v = field(c);
-    return r.read(key, v);
-  };
-  k.value = [field](const RunConfig& c) { return formatValue(field(c)); };
-  return k;
+  return plain<std::string>(std::move(name), field, "", std::move(doc));
 }
 
 template <typename F>
 ConfigKey unsignedInt(std::string name, F field, std::string doc) {
-  ConfigKey k{std::move(name), "", "0..2^64-1", std::move(doc), {}, {}};
-  k.read = [field](ConfigReader& r, const std::string& key, RunConfig& c) {
-    std::uint64_t& v = field(c);
-    return r.read(key, v);
-  };
-  k.value = [field](const RunConfig& c) { return formatValue(field(c)); };
-  return k;
+  return plain<std::uint64_t>(std::move(name), field, "0..2^64-1", std::move(doc));
 }
 
 template <typename F, typename E, std::size_t N>

@@ -22,6 +22,7 @@
 #include "pipeline/realtime/pipeline_runner.hpp"
 #include "pipeline/realtime/slam_stages.hpp"
 #include "pipeline/run/run_outputs.hpp"
+#include "scripted_graph.hpp"
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define SVSLAM_COUNT_ALLOCATIONS 0  // the sanitizers own operator new: counting is skipped
@@ -112,14 +113,7 @@ class QuietWork {
     if (slot.frame.index >= last_ && at_last_ < 0) at_last_ = g_allocations.load();
     return Status::ok();
   }
-  StageGraph graph(EdgePolicy capture_input) {
-    StageGraph g;
-    g.source = {"capture", [this](FrameSlot& s) { return capture(s); }};
-    g.stages = {{"stereo", [this](FrameSlot& s) { return stereo(s); }, capture_input},
-                {"estimator", [this](FrameSlot& s) { return estimate(s); }},
-                {"publisher", [this](FrameSlot& s) { return publish(s); }}};
-    return g;
-  }
+  StageGraph graph(EdgePolicy capture_input) { return fourStageGraph(*this, capture_input); }
   std::int64_t at_first_ = -1, at_last_ = -1, sum_ = 0;
 
  private:
@@ -134,8 +128,7 @@ TEST(Allocations, PipelineMachineryAllocatesNothingPerFrame) {
     QuietWork work(600, 100, 500);
     PipelineRunner runner(
         o, work.graph(keep_newest ? EdgePolicy::kNewest : EdgePolicy::kBlocking));
-    std::vector<std::unique_ptr<FrameSlot>> slots;
-    for (int i = 0; i < runner.slotsNeeded(); ++i) slots.push_back(std::make_unique<FrameSlot>());
+    auto slots = makeSlots(runner);
     PipelineControl control;
     ASSERT_TRUE(runner.run(slots, control, nullptr).isOk());
     ASSERT_GE(work.at_first_, 0);
@@ -244,8 +237,7 @@ TEST_P(FullWork, AllocatesNothingPerFrame) {
   PipelineOptions o;
   PipelineRunner runner(o, counting.wrap(work.graph(EdgePolicy::kBlocking)));
   ASSERT_LT(runner.slotsNeeded(), kFirst);
-  std::vector<std::unique_ptr<FrameSlot>> slots;
-  for (int i = 0; i < runner.slotsNeeded(); ++i) slots.push_back(std::make_unique<FrameSlot>());
+  auto slots = makeSlots(runner);
   PipelineControl control;
   ASSERT_TRUE(runner.run(slots, control, nullptr).isOk());
   const int frames = work.summary().frames, added = work.summary().added;

@@ -1,23 +1,21 @@
 // The svslam executable end to end: outputs, JSON, and a clear error with a non-zero exit for
 // every kind of bad input (never a crash).
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <sstream>
 #include <string>
 
+#include "cli_helpers.hpp"
 #include "drivers/files/image_io.hpp"
 #include "drivers/files/opencv_view.hpp"
 #include "drivers/synthetic/synthetic_pair.hpp"
 
 namespace fs = std::filesystem;
+using svslam::test::slurp;
 
 namespace {
 
@@ -29,10 +27,7 @@ struct CliRun {
 class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("svslam_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
+    dir_ = svslam::test::freshTestDir("svslam_cli_");
     svslam::drivers::SyntheticPairParams p;
     p.width = 160;
     p.height = 120;
@@ -52,19 +47,10 @@ class Cli : public ::testing::Test {
   }
   CliRun run(const std::string& args) const {
     CliRun r;
-    const std::string cmd = std::string(SVSLAM_CLI) + " " + args + " > " + path("stdout.txt") +
-                            " 2> " + path("stderr.txt");
-    const int status = std::system(cmd.c_str());
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.code = svslam::test::runSvslam(args, path("stdout.txt"), path("stderr.txt"));
     r.out = slurp(path("stdout.txt"));
     r.err = slurp(path("stderr.txt"));
     return r;
-  }
-  static std::string slurp(const std::string& p) {
-    std::ifstream f(p);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
   }
   // A failing run: exit code 1 or 2 (not a crash), a message on stderr containing `needle`.
   void expectError(const std::string& args, const std::string& needle) const {

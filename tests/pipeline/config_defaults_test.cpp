@@ -10,19 +10,14 @@
 #include <sstream>
 #include <string>
 
+#include "cli_helpers.hpp"
 #include "pipeline/config/config_keys.hpp"
 #include "pipeline/config/run_config.hpp"
 
 using namespace svslam::config;
+using svslam::test::slurp;
 
 namespace {
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
 
 // stdout of `svslam <args>`, and its exit code.
 std::string runCli(const std::string& args, int& code) {
@@ -32,7 +27,7 @@ std::string runCli(const std::string& args, int& code) {
   char buf[4096];
   for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
   const int status = ::pclose(p);
-  code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  code = svslam::test::exitCode(status);
   return out;
 }
 

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <thread>
 
+#include "cli_helpers.hpp"
 #include "drivers/lcm/lcm_messages.hpp"
 #include "drivers/lcm/lcm_transport.hpp"
 #include "svslam_lcm/command_status_t.hpp"
@@ -26,14 +27,9 @@ using namespace std::chrono_literals;
 namespace svslam::drivers {
 namespace {
 
-const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
+using test::slurp;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 // Starts `cmd` with /bin/sh in the background; returns its pid.
 pid_t spawn(const std::string& cmd) {
@@ -51,7 +47,7 @@ int waitExit(pid_t pid, std::chrono::seconds timeout) {
   for (;;) {
     int st = 0;
     const pid_t r = ::waitpid(pid, &st, WNOHANG);
-    if (r == pid) return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+    if (r == pid) return test::exitCode(st);
     if (std::chrono::steady_clock::now() - t0 > timeout) {
       ::kill(pid, SIGKILL);
       ::waitpid(pid, &st, 0);

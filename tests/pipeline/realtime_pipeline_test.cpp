@@ -13,14 +13,18 @@
 #include <sstream>
 #include <thread>
 
+#include "cli_helpers.hpp"
 #include "pipeline/realtime/edges.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
+#include "scripted_graph.hpp"
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
 namespace svslam::rt {
 namespace {
+
+using test::slurp;
 
 TEST(BlockingEdge, KeepsOrderAndEndsAfterClose) {
   BlockingEdge<int> e(3);
@@ -127,14 +131,8 @@ class ScriptedWork {
     published_.push_back({slot.frame.index, slot.result.landmarks_in_state});
     return Status::ok();
   }
-  // The four stages as a graph; `capture_input`: the policy of the edge capture -> stereo.
   StageGraph graph(EdgePolicy capture_input = EdgePolicy::kBlocking) {
-    StageGraph g;
-    g.source = {"capture", [this](FrameSlot& s) { return capture(s); }};
-    g.stages = {{"stereo", [this](FrameSlot& s) { return stereo(s); }, capture_input},
-                {"estimator", [this](FrameSlot& s) { return estimate(s); }},
-                {"publisher", [this](FrameSlot& s) { return publish(s); }}};
-    return g;
+    return fourStageGraph(*this, capture_input);
   }
   int fail_at_ = -1;
   int capture_fail_at_ = -1;
@@ -146,12 +144,6 @@ class ScriptedWork {
   int next_ = 0;
   std::uint64_t state_ = 7;
 };
-
-std::vector<std::unique_ptr<FrameSlot>> makeSlots(const PipelineRunner& runner) {
-  std::vector<std::unique_ptr<FrameSlot>> s;
-  for (int i = 0; i < runner.slotsNeeded(); ++i) s.push_back(std::make_unique<FrameSlot>());
-  return s;
-}
 
 std::vector<std::pair<int, int>> runScripted(const PipelineOptions& o, int frames,
                                              PipelineReport* report = nullptr) {
@@ -284,39 +276,33 @@ TEST(PipelineRunner, StopDrainsEveryFrameInFlight) {
   EXPECT_EQ(static_cast<std::int64_t>(work.published_.size()), r.captured);
 }
 
-TEST(PipelineRunner, StageErrorStopsTheRunAndIsReported) {
+// 100 scripted frames, threaded and sequential, where frame `at` fails (`fail`: the stage that
+// fails it): the run stops with an error naming `message`, every frame before `at` published.
+void expectStopsAt(int ScriptedWork::*fail, int at, const std::string& message) {
   for (bool sequential : {false, true}) {
     PipelineOptions o;
     o.sequential = sequential;
     ScriptedWork work(100);
-    work.fail_at_ = 40;
+    work.*fail = at;
     PipelineRunner runner(o, work.graph());
     PipelineControl control;
     auto slots = makeSlots(runner);
     const Status s = runner.run(slots, control, nullptr);
     EXPECT_FALSE(s.isOk());
-    EXPECT_NE(s.message().find("scripted failure"), std::string::npos);
-    ASSERT_EQ(work.published_.size(), 40u) << "sequential " << sequential;
-    EXPECT_EQ(work.published_.back().first, 39);
+    EXPECT_NE(s.message().find(message), std::string::npos) << s.message();
+    ASSERT_EQ(work.published_.size(), static_cast<std::size_t>(at)) << "sequential " << sequential;
+    EXPECT_EQ(work.published_.back().first, at - 1);
   }
+}
+
+TEST(PipelineRunner, StageErrorStopsTheRunAndIsReported) {
+  expectStopsAt(&ScriptedWork::fail_at_, 40, "scripted failure");
 }
 
 TEST(PipelineRunner, CaptureErrorKeepsEveryFrameBeforeIt) {
   // Nothing already computed is lost: the frames in flight behind an unreadable frame are
   // still estimated and published.
-  for (bool sequential : {false, true}) {
-    PipelineOptions o;
-    o.sequential = sequential;
-    ScriptedWork work(100);
-    work.capture_fail_at_ = 30;
-    PipelineRunner runner(o, work.graph());
-    PipelineControl control;
-    auto slots = makeSlots(runner);
-    const Status s = runner.run(slots, control, nullptr);
-    EXPECT_NE(s.message().find("scripted unreadable frame"), std::string::npos);
-    ASSERT_EQ(work.published_.size(), 30u) << "sequential " << sequential;
-    EXPECT_EQ(work.published_.back().first, 29);
-  }
+  expectStopsAt(&ScriptedWork::capture_fail_at_, 30, "scripted unreadable frame");
 }
 
 TEST(PipelineRunner, RejectsTooFewSlotsAndBadOptions) {
@@ -343,20 +329,10 @@ TEST(PipelineRunner, RejectsTooFewSlotsAndBadOptions) {
 
 // --- svslam run: threaded == sequential, byte for byte ----------------------------------------
 
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 int runCli(const std::string& args, const fs::path& dir) {
-  const std::string cmd = std::string(SVSLAM_CLI) + " run " + args + " --out " + dir.string() +
-                          " > " + (dir / "stdout.txt").string() + " 2> " +
-                          (dir / "stderr.txt").string();
   fs::create_directories(dir);
-  const int st = std::system(cmd.c_str());
-  return WIFEXITED(st) ? WEXITSTATUS(st) : 128;
+  return test::runSvslam("run " + args + " --out " + dir.string(), dir / "stdout.txt",
+                         dir / "stderr.txt");
 }
 
 TEST(RunPipeline, ThreadedOutputsEqualSequentialOnAReplay) {

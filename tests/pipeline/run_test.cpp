@@ -2,30 +2,21 @@
 // (skipped with a message when ../shared/data is absent), and clear errors on bad input with
 // nothing already written lost.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 
+#include "cli_helpers.hpp"
 #include "drivers/files/trajectory_io.hpp"
 
 namespace fs = std::filesystem;
+using svslam::test::slurp;
 
 namespace {
 
 const std::string kKitti = std::string(SVSLAM_DATA_DIR) + "/kitti_odometry_seq_a";
-
-std::string slurp(const std::string& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
 
 int countLines(const std::string& text) {
   int n = 0;
@@ -35,20 +26,13 @@ int countLines(const std::string& text) {
 
 class Run : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("svslam_run_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = svslam::test::freshTestDir("svslam_run_"); }
   void TearDown() override { fs::remove_all(dir_); }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
   int run(const std::string& args, std::string* err = nullptr) const {
-    const std::string cmd = std::string(SVSLAM_CLI) + " run " + args + " > " +
-                            path("stdout.txt") + " 2> " + path("stderr.txt");
-    const int status = std::system(cmd.c_str());
+    const int code = svslam::test::runSvslam("run " + args, path("stdout.txt"), path("stderr.txt"));
     if (err) *err = slurp(path("stderr.txt"));
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return code;
   }
   fs::path dir_;
 };

@@ -17,17 +17,13 @@
 #include <string>
 #include <thread>
 
+#include "cli_helpers.hpp"
+
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
+using svslam::test::slurp;
 
 namespace {
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
 
 int countOf(const std::string& s, const std::string& needle) {
   int n = 0;
@@ -102,7 +98,7 @@ class Service : public ::testing::Test {
 int waitExit(pid_t pid) {
   int st = 0;
   ::waitpid(pid, &st, 0);
-  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+  return svslam::test::exitCode(st);
 }
 
 TEST_F(Service, ReadyWatchdogAndCleanStopOnSigterm) {
@@ -122,7 +118,7 @@ TEST_F(Service, ReadyWatchdogAndCleanStopOnSigterm) {
   for (int i = 0; i < 600; ++i) {
     int st = 0;
     if (::waitpid(pid, &st, WNOHANG) == pid) {
-      rc = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+      rc = svslam::test::exitCode(st);
       break;
     }
     drain();

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <new>
 #include <random>
 
@@ -266,67 +267,37 @@ TEST(DenseStereo, FiltersRejectUntexturedAndInconsistentPixels) {
 }
 
 TEST(DenseStereo, RejectsBadParametersAndInputs) {
-  auto bad = [](DenseStereoParams p) { return !p.validate().isOk(); };
   DenseStereoParams p;
   EXPECT_TRUE(p.validate().isOk());
-  {
-    auto q = p;
-    q.max_disp = 0;
-    EXPECT_TRUE(bad(q));
-  }
-  {
-    auto q = p;
-    q.min_disp = -1;
-    EXPECT_TRUE(bad(q));
-  }
-  {
-    auto q = p;
-    q.min_disp = 64;
-    EXPECT_TRUE(bad(q));
-  }
-  {
-    auto q = p;
-    q.census_w = 9;
-    q.census_h = 9;
-    EXPECT_TRUE(bad(q));
-  }  // 80 neighbours
-  {
-    auto q = p;
-    q.census_w = 4;
-    EXPECT_TRUE(bad(q));
-  }
-  {
-    auto q = p;
-    q.window_w = 33;
-    EXPECT_TRUE(bad(q));
-  }
-  {
-    auto q = p;
-    q.cost = MatchingCost::kSad;
-    q.prefilter = SadPrefilter::kNone;
-    q.window_w = 17;
-    q.window_h = 17;
-    EXPECT_TRUE(bad(q));
-  }  // 289 * 255 overflows 16 bits
-  {
-    auto q = p;
-    q.texture_threshold = std::nanf("");
-    EXPECT_TRUE(bad(q));
-  }
-  {
-    auto q = p;
-    q.uniqueness_pct = 101;
-    EXPECT_TRUE(bad(q));
-  }
-  {
-    auto q = p;
-    q.num_stripes = 0;
-    EXPECT_TRUE(bad(q));
-  }
-  {
-    auto q = p;
-    q.sigma_model.sigma_px[0] = -1.0f;
-    EXPECT_TRUE(bad(q));
+  // Each change alone makes the defaults invalid.
+  using Change = std::function<void(DenseStereoParams&)>;
+  const std::pair<const char*, Change> changes[] = {
+      {"max_disp 0", [](DenseStereoParams& q) { q.max_disp = 0; }},
+      {"min_disp -1", [](DenseStereoParams& q) { q.min_disp = -1; }},
+      {"min_disp 64", [](DenseStereoParams& q) { q.min_disp = 64; }},
+      {"census 9x9: 80 neighbours",
+       [](DenseStereoParams& q) {
+         q.census_w = 9;
+         q.census_h = 9;
+       }},
+      {"census_w 4", [](DenseStereoParams& q) { q.census_w = 4; }},
+      {"window_w 33", [](DenseStereoParams& q) { q.window_w = 33; }},
+      {"SAD 17x17 unfiltered: 289 * 255 overflows 16 bits",
+       [](DenseStereoParams& q) {
+         q.cost = MatchingCost::kSad;
+         q.prefilter = SadPrefilter::kNone;
+         q.window_w = 17;
+         q.window_h = 17;
+       }},
+      {"texture_threshold NaN", [](DenseStereoParams& q) { q.texture_threshold = std::nanf(""); }},
+      {"uniqueness_pct 101", [](DenseStereoParams& q) { q.uniqueness_pct = 101; }},
+      {"num_stripes 0", [](DenseStereoParams& q) { q.num_stripes = 0; }},
+      {"sigma_px[0] -1", [](DenseStereoParams& q) { q.sigma_model.sigma_px[0] = -1.0f; }},
+  };
+  for (const auto& [what, change] : changes) {
+    DenseStereoParams q = p;
+    change(q);
+    EXPECT_FALSE(q.validate().isOk()) << what;
   }
 
   DenseStereoParams q;

@@ -44,6 +44,21 @@ std::deque<FakeEvent> frames(int n, std::uint32_t first_seq = 0) {
   return s;
 }
 
+// One fake camera playing `script` on kDev, a capture opened on it, and the outputs of grab.
+struct OpenCapture {
+  explicit OpenCapture(std::deque<FakeEvent> script) {
+    dev.addCamera(kDev, camera(std::move(script)));
+    opened = cap.open();
+  }
+  Result<bool> grab() { return cap.grab(img, t, seq); }
+  FakeV4l2Device dev;
+  V4l2Capture cap{dev, params()};
+  Status opened;
+  ImageU8 img;
+  TimeNs t = 0;
+  std::uint32_t seq = 0;
+};
+
 double meanAbsDiff(const ImageU8& a, const ImageU8& b) {
   double sum = 0;
   for (int y = 0; y < a.height(); ++y)
@@ -99,96 +114,69 @@ TEST_P(CaptureFormats, FramesArriveInOrderAndBuffersAreRequeued) {
 INSTANTIATE_TEST_SUITE_P(AllFormats, CaptureFormats, ::testing::Values("GREY", "YUYV", "MJPEG"));
 
 TEST(V4l2Capture, RecoversFromEagainAndDropsErroredBuffers) {
-  FakeV4l2Device dev;
-  dev.addCamera(
-      kDev, camera({FakeEvent::frame(1000, 0), FakeEvent::eagain(), FakeEvent::eagain(),
-                    FakeEvent::frame(2000, 1), FakeEvent::eio(), FakeEvent::errorFlag(3000, 2),
-                    FakeEvent::frame(4000, 3), FakeEvent::frame(5000, 4), FakeEvent::frame(6000, 5),
-                    FakeEvent::frame(7000, 6)}));
-  V4l2Capture cap(dev, params());
-  ASSERT_TRUE(cap.open());
-  ImageU8 img;
-  TimeNs t = 0;
-  std::uint32_t seq = 0;
+  OpenCapture c({FakeEvent::frame(1000, 0), FakeEvent::eagain(), FakeEvent::eagain(),
+                 FakeEvent::frame(2000, 1), FakeEvent::eio(), FakeEvent::errorFlag(3000, 2),
+                 FakeEvent::frame(4000, 3), FakeEvent::frame(5000, 4), FakeEvent::frame(6000, 5),
+                 FakeEvent::frame(7000, 6)});
+  ASSERT_TRUE(c.opened);
   std::vector<std::uint32_t> got;
   for (int i = 0; i < 6; ++i) {
-    auto r = cap.grab(img, t, seq);
+    auto r = c.grab();
     ASSERT_TRUE(r) << r.status().message();
-    got.push_back(seq);
+    got.push_back(c.seq);
   }
   EXPECT_EQ(got, (std::vector<std::uint32_t>{0, 1, 3, 4, 5, 6}));
-  EXPECT_EQ(cap.stats().retries, 2u);
-  EXPECT_EQ(cap.stats().dropped, 2u);
-  EXPECT_EQ(cap.stats().sequence_gaps, 1u);  // sequence 2 never delivered
-  EXPECT_EQ(dev.starved(), 0);               // EIO and FLAG_ERROR buffers went back
+  EXPECT_EQ(c.cap.stats().retries, 2u);
+  EXPECT_EQ(c.cap.stats().dropped, 2u);
+  EXPECT_EQ(c.cap.stats().sequence_gaps, 1u);  // sequence 2 never delivered
+  EXPECT_EQ(c.dev.starved(), 0);               // EIO and FLAG_ERROR buffers went back
 }
 
 TEST(V4l2Capture, TooManyBadBuffersInARowIsAnError) {
-  FakeV4l2Device dev;
-  dev.addCamera(kDev, camera({FakeEvent::eio(), FakeEvent::errorFlag(1, 0), FakeEvent::eio(),
-                              FakeEvent::eio(), FakeEvent::frame(10, 1)}));
-  V4l2Capture cap(dev, params());
-  ASSERT_TRUE(cap.open());
-  ImageU8 img;
-  TimeNs t = 0;
-  std::uint32_t seq = 0;
-  auto r = cap.grab(img, t, seq);
+  OpenCapture c({FakeEvent::eio(), FakeEvent::errorFlag(1, 0), FakeEvent::eio(), FakeEvent::eio(),
+                 FakeEvent::frame(10, 1)});
+  ASSERT_TRUE(c.opened);
+  auto r = c.grab();
   ASSERT_FALSE(r);
   EXPECT_NE(r.status().message().find("4 bad buffers in a row"), std::string::npos)
       << r.status().message();
   // Streaming goes on: the next frame is still delivered.
-  auto again = cap.grab(img, t, seq);
+  auto again = c.grab();
   ASSERT_TRUE(again) << again.status().message();
-  EXPECT_EQ(seq, 1u);
+  EXPECT_EQ(c.seq, 1u);
 }
 
 TEST(V4l2Capture, UnplugIsACleanError) {
-  FakeV4l2Device dev;
-  dev.addCamera(kDev, camera({FakeEvent::frame(10, 0), FakeEvent::enodev()}));
-  V4l2Capture cap(dev, params());
-  ASSERT_TRUE(cap.open());
-  ImageU8 img;
-  TimeNs t = 0;
-  std::uint32_t seq = 0;
-  ASSERT_TRUE(cap.grab(img, t, seq));
-  auto r = cap.grab(img, t, seq);
+  OpenCapture c({FakeEvent::frame(10, 0), FakeEvent::enodev()});
+  ASSERT_TRUE(c.opened);
+  ASSERT_TRUE(c.grab());
+  auto r = c.grab();
   ASSERT_FALSE(r);
   EXPECT_EQ(r.status().message(), "device unplugged: /dev/video0");
-  auto after = cap.grab(img, t, seq);  // no longer streaming
+  auto after = c.grab();  // no longer streaming
   ASSERT_TRUE(after);
   EXPECT_FALSE(*after);
-  EXPECT_TRUE(cap.stop());
-  EXPECT_EQ(dev.openFds(), 0);
-  EXPECT_EQ(dev.mappedBuffers(), 0);
+  EXPECT_TRUE(c.cap.stop());
+  EXPECT_EQ(c.dev.openFds(), 0);
+  EXPECT_EQ(c.dev.mappedBuffers(), 0);
 }
 
 TEST(V4l2Capture, TimeoutNamesTheDevice) {
-  FakeV4l2Device dev;
-  dev.addCamera(kDev, camera({FakeEvent::timeout(), FakeEvent::frame(10, 0)}));
-  V4l2Capture cap(dev, params());
-  ASSERT_TRUE(cap.open());
-  ImageU8 img;
-  TimeNs t = 0;
-  std::uint32_t seq = 0;
-  auto r = cap.grab(img, t, seq);
+  OpenCapture c({FakeEvent::timeout(), FakeEvent::frame(10, 0)});
+  ASSERT_TRUE(c.opened);
+  auto r = c.grab();
   ASSERT_FALSE(r);
   EXPECT_EQ(r.status().message(), "timeout: no frame from /dev/video0 within 1000 ms");
-  EXPECT_TRUE(cap.grab(img, t, seq));  // a late camera can still deliver
+  EXPECT_TRUE(c.grab());  // a late camera can still deliver
 }
 
 TEST(V4l2Capture, NonMonotonicTimestampsAreDropped) {
-  FakeV4l2Device dev;
-  dev.addCamera(kDev, camera({FakeEvent::frame(2000, 0), FakeEvent::frame(1000, 1),
-                              FakeEvent::frame(3000, 2)}));
-  V4l2Capture cap(dev, params());
-  ASSERT_TRUE(cap.open());
-  ImageU8 img;
-  TimeNs t = 0;
-  std::uint32_t seq = 0;
-  ASSERT_TRUE(cap.grab(img, t, seq));
-  ASSERT_TRUE(cap.grab(img, t, seq));
-  EXPECT_EQ(seq, 2u);
-  EXPECT_EQ(cap.stats().non_monotonic, 1u);
+  OpenCapture c({FakeEvent::frame(2000, 0), FakeEvent::frame(1000, 1), FakeEvent::frame(3000, 2)});
+  ASSERT_TRUE(c.opened);
+  ASSERT_TRUE(c.grab());
+  ASSERT_TRUE(c.grab());
+  EXPECT_EQ(c.seq, 2u);
+  EXPECT_EQ(c.cap.stats().non_monotonic, 1u);
 }
 
 TEST(V4l2Capture, GrantedFormatMismatchIsAnError) {

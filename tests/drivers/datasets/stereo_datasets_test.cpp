@@ -1,12 +1,12 @@
 #include "drivers/datasets/stereo_datasets.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <string>
 
+#include "../../core/test_files.hpp"
 #include "drivers/files/image_io.hpp"
 
 namespace svslam::drivers {
@@ -21,6 +21,18 @@ std::string dataDir(const std::string& sub) { return std::string(SVSLAM_DATA_DIR
     if (!fs::is_directory(dir)) GTEST_SKIP() << "no stereo data at " << (dir); \
   } while (0)
 
+// A case was found and each of its fields is the one in `want`.
+void expectCase(const Result<StereoGtCase>& r, const StereoGtCase& want) {
+  ASSERT_TRUE(r.isOk()) << r.status().message();
+  EXPECT_EQ(r->name, want.name);
+  EXPECT_EQ(r->left, want.left);
+  EXPECT_EQ(r->right, want.right);
+  EXPECT_EQ(r->gt, want.gt);
+  EXPECT_EQ(r->mask, want.mask);
+  EXPECT_EQ(r->gt_scale, want.gt_scale);
+  EXPECT_EQ(r->max_disp, want.max_disp);
+}
+
 struct V2Expect {
   const char* name;
   double scale;
@@ -32,15 +44,10 @@ TEST(StereoDatasets, MiddleburyV2AllFour) {
                             V2Expect{"teddy", 4, 59}, V2Expect{"cones", 4, 59}}) {
     const std::string dir = dataDir(std::string("middlebury_v2/") + e.name);
     SKIP_WITHOUT(dir);
-    const Result<StereoGtCase> r = findStereoGtCase(dir);
-    ASSERT_TRUE(r.isOk()) << r.status().message();
-    EXPECT_EQ(r->name, e.name);
-    EXPECT_EQ(r->left, dir + "/imL.png");
-    EXPECT_EQ(r->right, dir + "/imR.png");
-    EXPECT_EQ(r->gt, dir + "/groundtruth.png");
-    EXPECT_EQ(r->mask, dir + "/nonocc.png");
-    EXPECT_EQ(r->gt_scale, e.scale);
-    EXPECT_EQ(r->max_disp, e.max_disp);
+    ASSERT_NO_FATAL_FAILURE(
+        expectCase(findStereoGtCase(dir),
+                   {e.name, dir + "/imL.png", dir + "/imR.png", dir + "/groundtruth.png",
+                    dir + "/nonocc.png", e.scale, e.max_disp}));
     for (const char* kind : {"all", "disc"}) {
       const Result<StereoGtCase> k = findStereoGtCase(dir + "/", kind);
       ASSERT_TRUE(k.isOk()) << k.status().message();
@@ -66,15 +73,10 @@ TEST(StereoDatasets, MiddleburyV2FilesLoad) {
 TEST(StereoDatasets, Middlebury2006Aloe) {
   const std::string dir = dataDir("middlebury2006_aloe");
   SKIP_WITHOUT(dir);
-  const Result<StereoGtCase> r = findStereoGtCase(dir);
-  ASSERT_TRUE(r.isOk()) << r.status().message();
-  EXPECT_EQ(r->name, "middlebury2006_aloe");
-  EXPECT_EQ(r->left, dir + "/aloeL.jpg");
-  EXPECT_EQ(r->right, dir + "/aloeR.jpg");
-  EXPECT_EQ(r->gt, dir + "/aloeGT.png");
-  EXPECT_EQ(r->mask, "");
-  EXPECT_EQ(r->gt_scale, 1.0);
-  EXPECT_EQ(r->max_disp, 224);  // GT max 211 -> 212 -> next multiple of 16
+  // max_disp: GT max 211 -> 212 -> next multiple of 16.
+  ASSERT_NO_FATAL_FAILURE(
+      expectCase(findStereoGtCase(dir), {"middlebury2006_aloe", dir + "/aloeL.jpg",
+                                         dir + "/aloeR.jpg", dir + "/aloeGT.png", "", 1.0, 224}));
   EXPECT_TRUE(findStereoGtCase(dir, "nonocc", "aloe").isOk());
   EXPECT_EQ(findStereoGtCase(dir, "nonocc", "cactus").status().code(), StatusCode::kNotFound);
 }
@@ -83,14 +85,10 @@ TEST(StereoDatasets, KittiStereo2012) {
   const std::string dir = dataDir("kitti_stereo2012_000070");
   SKIP_WITHOUT(dir);
   const Result<StereoGtCase> r = findStereoGtCase(dir);
-  ASSERT_TRUE(r.isOk()) << r.status().message();
-  EXPECT_EQ(r->name, "kitti_stereo2012_000070_000070_10");
-  EXPECT_EQ(r->left, dir + "/image_0/000070_10.png");
-  EXPECT_EQ(r->right, dir + "/image_1/000070_10.png");
-  EXPECT_EQ(r->gt, dir + "/disp_noc/000070_10.png");
-  EXPECT_EQ(r->mask, "");
-  EXPECT_EQ(r->gt_scale, 256.0);
-  EXPECT_EQ(r->max_disp, 256);  // < width 1241
+  // max_disp 256 < width 1241.
+  ASSERT_NO_FATAL_FAILURE(expectCase(
+      r, {"kitti_stereo2012_000070_000070_10", dir + "/image_0/000070_10.png",
+          dir + "/image_1/000070_10.png", dir + "/disp_noc/000070_10.png", "", 256.0, 256}));
 
   const Result<StereoGtCase> all = findStereoGtCase(dir, "all", "000070");
   ASSERT_TRUE(all.isOk()) << all.status().message();
@@ -112,13 +110,7 @@ TEST(StereoDatasets, KittiStereo2012) {
 // Synthetic folders in a temp dir: always runs, no shared data needed.
 class StereoDatasetsTmp : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("svslam_stereo_datasets_test_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = svslam::test::freshTestDir("svslam_stereo_datasets_test_"); }
   void TearDown() override {
     std::error_code ec;
     fs::remove_all(dir_, ec);

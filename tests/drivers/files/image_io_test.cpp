@@ -1,7 +1,6 @@
 #include "drivers/files/image_io.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstring>
@@ -15,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "../../core/test_files.hpp"
+
 namespace svslam::drivers {
 namespace {
 
@@ -24,13 +25,7 @@ constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 
 class ImageIoTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("svslam_image_io_test_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = svslam::test::freshTestDir("svslam_image_io_test_"); }
   void TearDown() override {
     std::error_code ec;
     fs::permissions(dir_, fs::perms::owner_all, fs::perm_options::add, ec);
