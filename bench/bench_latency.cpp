@@ -54,8 +54,8 @@ Outcome runOnce(drivers::PreloadedSource* frames_in_memory, double rate_hz, bool
   source.rewind();
   config::RunConfig cfg;
   config::applyThreads(cfg, threads);
-  cfg.pipeline.sequential = sequential;
-  cfg.pipeline.rate_hz = rate_hz;
+  cfg.pipeline.runner.sequential = sequential;
+  cfg.pipeline.runner.rate_hz = rate_hz;
   const std::string out = (std::filesystem::temp_directory_path() / "svslam_bench_latency").string();
   std::filesystem::create_directories(out);
   rt::SlamStages work(cfg, source, out, nullptr);
@@ -63,9 +63,7 @@ Outcome runOnce(drivers::PreloadedSource* frames_in_memory, double rate_hz, bool
     std::fprintf(stderr, "bench_latency: %s\n", s.message().c_str());
     return o;
   }
-  rt::PipelineOptions opts;
-  opts.sequential = sequential;
-  opts.rate_hz = rate_hz;
+  const rt::PipelineOptions& opts = cfg.pipeline.runner;
   // As for a camera: a late frame is dropped, and counted.
   rt::PipelineRunner runner(
       opts, work.graph(rate_hz > 0 ? rt::EdgePolicy::kNewest : rt::EdgePolicy::kBlocking));

@@ -48,14 +48,14 @@ Status applyOverrides(const ArgParser& p, config::RunConfig& cfg) {
   if (p.has("mode") && !config::parseName(config::kEstimatorModeNames, p.get("mode"), cfg.mode))
     return Status::invalidArgument("--mode: unknown mode '" + p.get("mode") + "' (use " +
                                    config::nameList(config::kEstimatorModeNames) + ")");
-  if (p.flag("sequential")) cfg.pipeline.sequential = true;
+  if (p.flag("sequential")) cfg.pipeline.runner.sequential = true;
   if (p.flag("preload")) cfg.pipeline.preload = true;
   if (p.has("rate")) {
     auto r = p.getDouble("rate");
     if (!r) return r.status();
     if (!(*r >= 0.0 && *r <= 10000.0))
       return Status::invalidArgument("--rate: must be in [0, 10000] Hz (0 = as fast as possible)");
-    cfg.pipeline.rate_hz = *r;
+    cfg.pipeline.runner.rate_hz = *r;
   }
   if (p.has("lcm-url")) {
     cfg.lcm.enabled = true;
@@ -186,10 +186,7 @@ int runPipeline(const std::vector<std::string>& args) {
   rt::SlamStages work(cfg, *source, out_dir, lcm.get());
   if (Status s = work.init(); !s) return fail(s);
 
-  rt::PipelineOptions opts;
-  opts.sequential = cfg.pipeline.sequential;
-  opts.rate_hz = cfg.pipeline.rate_hz;
-  opts.queue_capacity = cfg.pipeline.queue_capacity;
+  const rt::PipelineOptions& opts = cfg.pipeline.runner;
   if (Status s = opts.validate(); !s) return fail(s);
   const bool keep_newest = cfg.pipeline.capture_policy == config::CapturePolicy::kNewest ||
                            (cfg.pipeline.capture_policy == config::CapturePolicy::kAuto &&

@@ -7,6 +7,7 @@
 #include "core/status.hpp"
 #include "drivers/lcm/lcm_transport.hpp"
 #include "pipeline/config/enum_names.hpp"
+#include "pipeline/realtime/pipeline_options.hpp"
 #include "pipeline/service/scheduling.hpp"
 
 namespace svslam::config {
@@ -28,10 +29,8 @@ inline constexpr EnumNames<ReadyWhen, 2> kReadyWhenNames{
 const char* toString(ReadyWhen r);
 
 struct PipelineConfig {
-  bool sequential = false;  // every stage on one thread (same outputs as threaded)
-  double rate_hz = 0.0;     // replay a recorded source at this rate; 0 = as fast as possible
+  rt::PipelineOptions runner;  // sequential, rate_hz, queue_capacity: given to the runner as is
   CapturePolicy capture_policy = CapturePolicy::kAuto;  // the capture edge's queue policy
-  int queue_capacity = 2;                               // frames per inter-stage queue, 1..64
   // Read the whole recorded sequence into memory before the run (a paced replay then measures
   // the pipeline, not the disk or the synthetic renderer). Ignored for live sources.
   bool preload = false;

@@ -37,15 +37,15 @@ ConfigSection scheduling(const std::string& stage, F thread) {
 ConfigSection pipelineSection() {
   ConfigSection s{"pipeline", "the real-time pipeline (pipeline/realtime/pipeline_runner.hpp)", {}};
   s.keys = {
-      flag("sequential", SVSLAM_FIELD(pipeline.sequential),
+      flag("sequential", SVSLAM_FIELD(pipeline.runner.sequential),
            "true: every stage on one thread (same outputs); --sequential"),
-      number("rate_hz", SVSLAM_FIELD(pipeline.rate_hz), 0, 10000, "Hz",
+      number("rate_hz", SVSLAM_FIELD(pipeline.runner.rate_hz), 0, 10000, "Hz",
              "replay a recorded source at this rate, frames stamped as if captured then; "
              "0 = as fast as possible; --rate"),
       choice("capture_policy", SVSLAM_FIELD(pipeline.capture_policy), kCapturePolicyNames,
              "newest: the capture edge keeps the newest frame and counts drops; block: capture "
              "waits (no drop); auto: newest for live sources and paced replays, else block"),
-      number("queue_capacity", SVSLAM_FIELD(pipeline.queue_capacity), 1, 64, "",
+      number("queue_capacity", SVSLAM_FIELD(pipeline.runner.queue_capacity), 1, 64, "",
              "frames per inter-stage queue"),
       flag("preload", SVSLAM_FIELD(pipeline.preload),
            "read the recorded sequence into memory first; --preload"),

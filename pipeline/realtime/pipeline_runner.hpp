@@ -19,16 +19,10 @@
 #include "core/status.hpp"
 #include "pipeline/realtime/frame_slot.hpp"
 #include "pipeline/realtime/latency_stats.hpp"
+#include "pipeline/realtime/pipeline_options.hpp"
 #include "pipeline/realtime/stage_graph.hpp"
 
 namespace svslam::rt {
-
-struct PipelineOptions {
-  bool sequential = false;  // run every stage on the calling thread
-  double rate_hz = 0.0;     // pace capture at this rate (replays); 0 = as fast as possible
-  int queue_capacity = 2;   // slots per blocking edge, >= 1
-  Status validate() const;
-};
 
 // Shared between the pipeline and whoever controls it (signal handler flag, LCM commands).
 struct PipelineControl {

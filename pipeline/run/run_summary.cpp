@@ -96,8 +96,8 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
   }
   j.addRaw("stage_ms", times.json());
   JsonObject p;
-  p.add("threaded", !cfg.pipeline.sequential)
-      .add("rate_hz", cfg.pipeline.rate_hz, 3)
+  p.add("threaded", !cfg.pipeline.runner.sequential)
+      .add("rate_hz", cfg.pipeline.runner.rate_hz, 3)
       .add("frames_captured", static_cast<std::int64_t>(pipeline.captured))
       .add("frames_published", static_cast<std::int64_t>(pipeline.published))
       .add("frames_dropped", static_cast<std::int64_t>(pipeline.dropped))
