@@ -15,11 +15,12 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "drivers/files/file_bytes.hpp"
+
 namespace svslam::drivers {
 namespace {
 
 namespace fs = std::filesystem;
-using Bytes = std::vector<unsigned char>;
 
 constexpr float kInvalid = std::numeric_limits<float>::infinity();
 constexpr std::int64_t kMaxPfmPixels = std::int64_t{1} << 28;
@@ -29,31 +30,6 @@ std::string lowerExtension(const std::string& path) {
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
-}
-
-// Whole file in memory; `what` names the kind of file in messages ("image", "PFM file", ...).
-Result<Bytes> readFileBytes(const std::string& path, const char* what) {
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (!fs::exists(st)) return Status::notFound(std::string(what) + " does not exist: " + path);
-  if (fs::is_directory(st)) {
-    return Status::invalidArgument(std::string(what) + " is a directory, not a file: " + path);
-  }
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) {
-    return Status::ioError("cannot open " + path + " for reading: " + std::strerror(errno));
-  }
-  Bytes bytes;
-  unsigned char chunk[1 << 16];
-  std::size_t got = 0;
-  while ((got = std::fread(chunk, 1, sizeof(chunk), f)) > 0)
-    bytes.insert(bytes.end(), chunk, chunk + got);
-  const bool failed = std::ferror(f) != 0;
-  std::fclose(f);
-  if (failed) return Status::ioError("reading " + path + " failed");
-  if (bytes.empty())
-    return Status::invalidArgument(std::string(what) + " is empty (0 bytes): " + path);
-  return bytes;
 }
 
 bool isPng(const Bytes& b) {
@@ -107,34 +83,6 @@ ImageU8 toImageU8(const cv::Mat& m) {
   ImageU8 out(m.cols, m.rows);
   for (int y = 0; y < m.rows; ++y) std::memcpy(out.row(y), m.ptr<std::uint8_t>(y), m.cols);
   return out;
-}
-
-// Writes `path + ".tmp"`, then renames it over `path`; removes the temporary on any failure.
-Status writeFileAtomically(const std::string& path, const void* data, std::size_t n) {
-  const std::string tmp = path + ".tmp";
-  std::error_code ec;
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (f == nullptr) {
-    const std::string why = std::strerror(errno);
-    fs::remove(tmp, ec);
-    return Status::ioError("cannot write " + path + ": cannot create " + tmp + ": " + why);
-  }
-  const bool wrote = std::fwrite(data, 1, n, f) == n && std::fflush(f) == 0;
-  const std::string why = wrote ? std::string() : std::strerror(errno);
-  const bool closed = std::fclose(f) == 0;
-  if (!wrote || !closed) {
-    fs::remove(tmp, ec);
-    return Status::ioError("cannot write " + path + ": writing " + tmp + " failed" +
-                           (why.empty() ? std::string() : ": " + why));
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    return Status::ioError("cannot write " + path + ": cannot rename " + tmp +
-                           " to it: " + ec.message());
-  }
-  return Status::ok();
 }
 
 Status writePngAtomically(const std::string& path, const cv::Mat& m) {

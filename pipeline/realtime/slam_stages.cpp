@@ -110,8 +110,8 @@ Status SlamStages::stereo(FrameSlot& slot) {
   TrackingFeedback fb;  // no ROIs before the first frame
   if (stereo_stage_->needsFeedback() && last_stereo_seq_ >= 0) {
     const std::int64_t w0 = steadyNowNs();
-    if (!feedback_.wait(last_stereo_seq_, fb))
-      return Status::failedPrecondition("stereo: the estimator stopped");
+    // Closed: the estimator failed (its error, written before the close, is the run's error).
+    if (!feedback_.wait(last_stereo_seq_, fb)) return estimator_error_;
     stereo_times_.add("wait_estimator", static_cast<double>(steadyNowNs() - w0) * 1e-6);
     stereo_clock_->start();
   }
@@ -122,10 +122,12 @@ Status SlamStages::stereo(FrameSlot& slot) {
 Status SlamStages::estimate(FrameSlot& slot) {
   const Status s = estimateFrame(slot);
   // The stereo stage of the next frame waits for this (a failed run: for nothing more).
-  if (s)
+  if (s) {
     feedback_.publish(slot.seq, estimator_->feedback());
-  else
+  } else {
+    estimator_error_ = s;
     feedback_.close();
+  }
   return s;
 }
 

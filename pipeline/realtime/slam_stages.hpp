@@ -85,6 +85,7 @@ class SlamStages {
   std::int64_t last_stereo_seq_ = -1;  // the frame the stereo stage handed on last
   // Estimator -> stereo: the feedback on each frame (ROI tracking).
   FeedbackCell<TrackingFeedback> feedback_;
+  Status estimator_error_;  // written before feedback_ is closed, read after
   // Estimator thread.
   std::unique_ptr<Estimator> estimator_;
   std::unique_ptr<Executor> estimator_executor_;  // its own pool: runs beside the stereo one
