@@ -16,6 +16,8 @@ namespace svslam {
 
 using Eigen::Lower;
 using ekf_checks::checkCovariance;
+using ekf_checks::CovarianceFault;
+using ekf_checks::covarianceFault;
 using ekf_checks::checkRigid;
 using ekf_checks::orthonormalised;
 using ekf_checks::symmetrise;
