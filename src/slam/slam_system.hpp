@@ -3,8 +3,9 @@
 // non-landmark matches predicts the pose; landmarks observed in the frame update it.
 //
 // Per frame:
-//  1. front end (StereoOdometry::frontEnd): points and temporal matches; tracks (candidate
-//     flags, track lengths) pass from the previous frame's points to the current ones;
+//  1. front end (StereoOdometry::frontEnd on the stereo stage's output: points with their 3D
+//     position and covariance): temporal matches; tracks (candidate flags, track lengths) pass
+//     from the previous frame's points to the current ones;
 //  2. VME on the non-landmark, non-candidate matches only (prediction and update decorrelated):
 //     a match is left out when its previous point is a candidate or lies within
 //     landmark_exclusion_px of a landmark observed in the previous frame; prediction with
