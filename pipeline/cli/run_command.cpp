@@ -260,8 +260,8 @@ int runPipeline(const std::vector<std::string>& args) {
   const run::StageTimes times = work.stageTimes();
   const rt::PipelineReport& rep = runner.report();
   if (Status s = run::writeFileAtomic(out_dir + "/stats.json",
-                                      run::statsJson(cfg, source_spec, work.summary(), times, rep,
-                                                     error));
+                                      run::statsJson(cfg, source_spec, work.summary(),
+                                                     work.outputs(), times, rep, error));
       !s)
     return fail(s);
   if (!error.empty()) return fail(Status::ioError(error));

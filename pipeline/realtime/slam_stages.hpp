@@ -51,6 +51,8 @@ class SlamStages {
   // After the run (stages stopped): closes the files, writes landmarks.ply.
   Status finish();
   const run::RunSummary& summary() const { return publisher_->summary(); }
+  // What the estimator produces beyond the pose (after init()).
+  EstimatorOutputs outputs() const { return estimator_->outputs(); }
   // Algorithm stage times (dense_stereo, detect, stereo_match, temporal_match, motion, ekf,
   // front_end = stereo + estimator work, load). Read after the run.
   run::StageTimes stageTimes() const;

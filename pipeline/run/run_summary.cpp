@@ -49,8 +49,8 @@ std::string latency(const rt::LatencySummary& l) {
 }  // namespace
 
 std::string statsJson(const config::RunConfig& cfg, const std::string& source, const RunSummary& s,
-                      const StageTimes& times, const rt::PipelineReport& pipeline,
-                      const std::string& error) {
+                      EstimatorOutputs outputs, const StageTimes& times,
+                      const rt::PipelineReport& pipeline, const std::string& error) {
   JsonObject fails;
   for (const auto& [reason, n] : s.failure_counts) fails.add(reason, n);
   std::string list = "[";
@@ -79,7 +79,7 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
       .add("dense_stereo", cfg.odometry.dense)
       .add("seed", static_cast<std::int64_t>(cfg.seed))
       .add("front_end_median_ms", times.median("front_end"), 3);
-  if (cfg.mode == config::EstimatorMode::kEkf) {
+  if (outputs.landmark_map) {
     j.add("landmarks_in_state_mean", s.sum_in_state / n, 1)
         .add("landmarks_in_state_max", s.max_in_state)
         .add("landmarks_in_map", s.landmarks_in_map)

@@ -30,9 +30,10 @@ struct RunSummary {
 
 // stats.json: the run's configuration summary, the per-frame means, the per-stage times
 // (`times`: algorithm stages, ms) and the pipeline's report (stage latencies, end-to-end
-// latency capture -> pose published, queues, drops, frames per second).
+// latency capture -> pose published, queues, drops, frames per second); the landmark figures
+// when the estimator keeps a landmark map (`outputs`).
 std::string statsJson(const config::RunConfig& cfg, const std::string& source, const RunSummary& s,
-                      const StageTimes& times, const rt::PipelineReport& pipeline,
-                      const std::string& error);
+                      EstimatorOutputs outputs, const StageTimes& times,
+                      const rt::PipelineReport& pipeline, const std::string& error);
 
 }  // namespace svslam::run
