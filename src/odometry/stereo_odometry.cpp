@@ -5,8 +5,6 @@
 #include <cstring>
 #include <utility>
 
-#include "stereo/reprojection.hpp"
-
 namespace svslam {
 
 StereoOdometry::StereoOdometry(const StereoOdometryParams& params, const StereoCalibration& calib)
@@ -45,12 +43,8 @@ TrackingFeedback StereoOdometry::feedback() const {
 
 bool StereoOdometry::observe(const TrackPoint& p, double matching_error_px,
                              StereoPoint& out) const {
-  if (disp_)
-    return neighbourhoodPoint(disp_->disparity_px.cview(), disp_->sigma_d_px.cview(), calib_,
-                              p.u_px, p.v_px, matching_error_px, 5, out);
-  if (!(p.d_px > 0.0f)) return false;
-  out = reprojectPixel(calib_, p.u_px, p.v_px, p.d_px, p.sigma_d_px, matching_error_px);
-  return out.p_cam.allFinite() && out.cov.allFinite();
+  return stereoObservation(calib_, disp_, p.u_px, p.v_px, p.d_px, p.sigma_d_px, matching_error_px,
+                           out);
 }
 
 Status StereoOdometry::process(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,

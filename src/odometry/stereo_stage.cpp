@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "stereo/reprojection.hpp"
-
 namespace svslam {
 
 namespace {
@@ -16,6 +14,17 @@ CornerParams detectorParams(const StereoOdometryParams& p) {
   return c;
 }
 }  // namespace
+
+bool stereoObservation(const StereoCalibration& calib, const DisparityResult* dense, float u_px,
+                       float v_px, float d_px, float sigma_d_px, double matching_error_px,
+                       StereoPoint& out) {
+  if (dense)
+    return neighbourhoodPoint(dense->disparity_px.cview(), dense->sigma_d_px.cview(), calib, u_px,
+                              v_px, matching_error_px, 5, out);
+  if (!(d_px > 0.0f)) return false;
+  out = reprojectPixel(calib, u_px, v_px, d_px, sigma_d_px, matching_error_px);
+  return out.p_cam.allFinite() && out.cov.allFinite();
+}
 
 void StereoStageOutput::clear() {
   has_disparity = false;
@@ -138,14 +147,10 @@ void StereoStage::buildPoints(StereoStageOutput& out) const {
   for (const StereoMatch& m : out.stereo) {
     if (!(m.d_px >= min_d)) continue;
     StereoPoint sp;
-    if (disp) {
-      if (!neighbourhoodPoint(disp->disparity_px.cview(), disp->sigma_d_px.cview(), calib_, m.u_px,
-                              m.v_px, params_.match_sigma_px, 5, sp))
-        continue;
-    } else {
-      sp = reprojectPixel(calib_, m.u_px, m.v_px, m.d_px, m.sigma_d_px, params_.match_sigma_px);
-    }
-    if (!sp.p_cam.allFinite() || !sp.cov.allFinite()) continue;
+    if (!stereoObservation(calib_, disp, m.u_px, m.v_px, m.d_px, m.sigma_d_px,
+                           params_.match_sigma_px, sp))
+      continue;
+    if (!sp.p_cam.allFinite() || !sp.cov.allFinite()) continue;  // the dense path too
     TrackPoint tp;
     tp.u_px = m.u_px;
     tp.v_px = m.v_px;

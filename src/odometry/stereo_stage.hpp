@@ -31,6 +31,7 @@
 #include "core/stage_observer.hpp"
 #include "core/status.hpp"
 #include "odometry/odometry_params.hpp"
+#include "stereo/reprojection.hpp"
 
 namespace svslam {
 
@@ -65,6 +66,15 @@ struct StereoStageOutput {
   // Clears the per-frame content, keeping the capacity.
   void clear();
 };
+
+// The 3D observation (left camera frame, m, with covariance) of a stereo-matched pixel (u, v)
+// of disparity d +- sigma_d px, with an image-plane matching error of matching_error_px: the
+// 8-neighbour combination of seed 001 sec 4.1 over `dense` when given, else the triangulation
+// Jacobian (d must be > 0 and the result finite). False when not observable. Used for the
+// stage's points (step 5) and for the estimator's observations of them.
+bool stereoObservation(const StereoCalibration& calib, const DisparityResult* dense, float u_px,
+                       float v_px, float d_px, float sigma_d_px, double matching_error_px,
+                       StereoPoint& out);
 
 class StereoStage {
  public:
