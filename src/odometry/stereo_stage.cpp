@@ -88,7 +88,6 @@ Status StereoStage::prepare(ImageView<const std::uint8_t> left, ImageView<const 
   // A pooled output is sized once for the bound (no growth frame after frame).
   out.corner_px.reserve(max_points_);
   out.corner_resp.reserve(max_points_);
-  out.stereo.reserve(max_points_);  // at most one match per point
   out.points.reserve(max_points_);
   if (dense_) {
     if (Status s = dense_->process(left, right, out.disparity, executor); !s) return s;
