@@ -1,0 +1,31 @@
+#pragma once
+// Parameters of the elevation map (seed 001 sec 5.2): a DEM z = f(x, y) and an orthoimage on a
+// regular grid of the map frame (map_frame.hpp), fused from dense stereo after every estimator
+// update. Units in the names; defaults are the values of config/svslam.yaml's `map:` section.
+#include <array>
+#include <cmath>
+#include "core/status.hpp"
+
+namespace svslam::map {
+
+struct DemParams {
+  double cell_m = 0.1;  // grid cell side, m, (0.001, 100]
+  // Gravity direction (unit vector, pointing down) in the first left camera's frame
+  // (x right, y down, z forward). [0, 0, 1]: a camera looking straight down (blimp);
+  // [0, 1, 0]: a level, forward-looking camera (car).
+  std::array<double, 3> gravity_in_first_camera{0.0, 0.0, 1.0};
+  int tile_cells = 64;          // tile side in cells (tiles are allocated on demand), [8, 1024]
+  double max_range_m = 60.0;    // points farther from the camera are not fused, m, > 0
+  double min_disparity_px = 1.0;  // smaller disparities (far, imprecise) are not fused, px, > 0
+  // Mahalanobis gate (chi-square, 1 dof) of a point's height against the cell's estimate; a
+  // point beyond it has its variance inflated to sit on the gate instead of dragging the cell.
+  double gate_chi2 = 9.0;  // (0, 1e6]
+  // Height standard deviation every cell keeps at least: the model error of dense stereo on a
+  // relief (window smoothing, the cell's own slope), m, >= 0.
+  double min_sigma_m = 0.01;
+  int max_tiles = 4096;  // bound on the tiles in memory (64 x 64 cells x 12 B = 48 KiB each)
+
+  Status validate() const;
+};
+
+}  // namespace svslam::map
