@@ -38,6 +38,7 @@ struct LcmParams {
   std::string pose_channel = "SVSLAM_POSE";
   std::string stats_channel = "SVSLAM_STATS";
   std::string map_channel = "SVSLAM_MAP";
+  std::string map_tile_channel = "SVSLAM_MAP_TILE";
   std::string command_channel = "SVSLAM_COMMAND";
   std::string status_channel = "SVSLAM_COMMAND_STATUS";
 

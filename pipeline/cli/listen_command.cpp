@@ -1,5 +1,5 @@
-// svslam listen: prints the poses (with covariance) and statistics published on LCM, one
-// JSON line each, as received by a separate process.
+// svslam listen: prints the poses (with covariance), statistics and elevation map tiles
+// published on LCM, one JSON line each, as received by a separate process.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "drivers/lcm/lcm_map_tile.hpp"
 #include "drivers/lcm/lcm_transport.hpp"
 #include "pipeline/cli/arg_parser.hpp"
 #include "pipeline/cli/commands.hpp"
@@ -88,20 +89,47 @@ std::string statsLine(const drivers::StatsReport& r) {
   return j.str();
 }
 
+// One line per map tile: its index, time, the cells with data and their mean height.
+std::string mapTileLine(const drivers::MapTileMessage& m) {
+  std::int64_t valid = 0;
+  double sum_m = 0.0;
+  for (std::size_t k = 0; k < m.tile.height_m.size(); ++k) {
+    if (m.tile.count[k] > 0.0f && std::isfinite(m.tile.height_m[k])) {
+      ++valid;
+      sum_m += m.tile.height_m[k];
+    }
+  }
+  JsonObject j;
+  j.add("type", "map_tile")
+      .add("seq", m.seq)
+      .add("t_ns", static_cast<std::int64_t>(m.t_ns))
+      .add("tile_i", m.tile_i)
+      .add("tile_j", m.tile_j)
+      .add("cells_per_side", m.tile.cols)
+      .add("cell_m", m.tile.cell_m, 6)
+      .add("valid_cells", valid)
+      .add("mean_height_m", valid > 0 ? sum_m / static_cast<double>(valid) : NAN, 4);
+  return j.str();
+}
+
 }  // namespace
 
 int runListen(const std::vector<std::string>& args) {
   const drivers::LcmParams defaults;
   ArgParser p("listen",
-              "Subscribes to the poses (and statistics) svslam publishes on LCM and prints one\n"
-              "JSON line per message on stdout: poses with seq, utime, publish_utime (us),\n"
-              "position (m), orientation (w, x, y, z), the covariance diagonal [rot rad^2,\n"
-              "trans m^2] and the tracking status. Exits 0 after --count poses, 1 when no pose\n"
-              "arrives within --timeout-s.");
+              "Subscribes to the poses (statistics, map tiles) svslam publishes on LCM and\n"
+              "prints one JSON line per message on stdout: poses with seq, utime,\n"
+              "publish_utime (us), position (m), orientation (w, x, y, z), the covariance\n"
+              "diagonal [rot rad^2, trans m^2] and the tracking status; map tiles with t_ns,\n"
+              "tile_i, tile_j, the cells with data and their mean height (m). Exits 0 after\n"
+              "--count poses, 1 when no pose arrives within --timeout-s.");
   p.addOption("url", "URL", "LCM URL", defaults.url);
   p.addOption("channel", "CHANNEL", "pose channel", defaults.pose_channel);
   p.addOption("stats-channel", "CHANNEL", "statistics channel", defaults.stats_channel);
   p.addFlag("no-stats", "do not print statistics");
+  p.addOption("map-tile-channel", "CHANNEL", "elevation map tile channel",
+              defaults.map_tile_channel);
+  p.addFlag("no-map-tiles", "do not print map tiles");
   p.addOption("count", "N", "exit 0 after N poses (0: never)", "0");
   p.addOption("timeout-s", "S", "longest wait for the next pose, seconds", "10");
   if (auto code = parseCommandLine(p, args)) return *code;
@@ -118,6 +146,7 @@ int runListen(const std::vector<std::string>& args) {
   lp.url = p.get("url");
   lp.pose_channel = p.get("channel");
   lp.stats_channel = p.get("stats-channel");
+  lp.map_tile_channel = p.get("map-tile-channel");
   auto link = drivers::LcmLink::open(lp);
   if (!link) return fail(link.status());
 
@@ -151,7 +180,21 @@ int runListen(const std::vector<std::string>& args) {
     std::printf("%s\n", statsLine(*r).c_str());
     std::fflush(stdout);
   };
+  auto on_map_tile = [&](const std::uint8_t* d, std::size_t n) {
+    drivers::MapTileMessage m;
+    if (Status s = drivers::decodeMapTile(d, n, m); !s) {
+      std::fprintf(stderr, "svslam listen: skipped a malformed map tile: %s\n",
+                   s.message().c_str());
+      return;
+    }
+    std::printf("%s\n", mapTileLine(m).c_str());
+    std::fflush(stdout);
+  };
   if (auto id = (*link)->subscribeRaw(lp.pose_channel, on_pose); !id) return fail(id.status());
+  if (!p.flag("no-map-tiles")) {
+    if (auto id = (*link)->subscribeRaw(lp.map_tile_channel, on_map_tile); !id)
+      return fail(id.status());
+  }
   if (!p.flag("no-stats")) {
     if (auto id = (*link)->subscribeRaw(lp.stats_channel, on_stats); !id)
       return fail(id.status());

@@ -149,7 +149,8 @@ int runPipeline(const std::vector<std::string>& args) {
         {"capture", &cfg.pipeline.capture},
         {"stereo", &cfg.pipeline.stereo},
         {"estimator", &cfg.pipeline.estimator},
-        {"publisher", &cfg.pipeline.publisher}};
+        {"publisher", &cfg.pipeline.publisher},
+        {"mapper", &cfg.pipeline.mapper}};
     for (const auto& [name, sched] : stages)
       for (int c : sched->cpus)
         if (ncpu > 0 && c >= ncpu)

@@ -49,10 +49,12 @@ struct ConfigSection {
   std::vector<ConfigKey> keys;
 };
 
-// Every section in file order: run_config_keys.cpp (with slam_config_keys.cpp), then
+// Every section in file order: run_config_keys.cpp (with slam_config_keys.cpp and
+// map_config_keys.cpp), then
 // pipeline_config_keys.cpp.
 std::vector<ConfigSection> runConfigSections();
 ConfigSection slamConfigSection();
+ConfigSection mapConfigSection();
 std::vector<ConfigSection> pipelineConfigSections();
 const std::vector<ConfigSection>& allConfigSections();
 

@@ -10,7 +10,8 @@ Status checkPipelineConfig(const std::string& file, const PipelineConfig& p, con
       {"capture", &p.capture},
       {"stereo", &p.stereo},
       {"estimator", &p.estimator},
-      {"publisher", &p.publisher}};
+      {"publisher", &p.publisher},
+      {"mapper", &p.mapper}};
   for (const auto& [stage, t] : stages)
     if (Status s = t->validate(); !s)
       return Status::invalidArgument(file + ": pipeline.scheduling." + stage + ": " + s.message());

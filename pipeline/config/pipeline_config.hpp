@@ -36,7 +36,7 @@ struct PipelineConfig {
   bool preload = false;
   double progress_period_s = 10.0;  // progress line on stderr every this many s (0 = never)
   // Per stage thread: CPU affinity and SCHED_FIFO priority (0 = normal scheduling).
-  service::ThreadScheduling capture, stereo, estimator, publisher;
+  service::ThreadScheduling capture, stereo, estimator, publisher, mapper;
 };
 
 struct LcmConfig {

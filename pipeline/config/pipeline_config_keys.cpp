@@ -67,6 +67,8 @@ ConfigSection lcmSection() {
            "svslam_lcm.stats_t, every stats_period_s"),
       text("map_channel", SVSLAM_FIELD(lcm.params.map_channel),
            "svslam_lcm.map_summary_t, every stats_period_s (ekf mode)"),
+      text("map_tile_channel", SVSLAM_FIELD(lcm.params.map_tile_channel),
+           "svslam_lcm.map_tile_t, the elevation map tiles changed, every map.publish_period_s"),
       text("command_channel", SVSLAM_FIELD(lcm.params.command_channel),
            "svslam_lcm.command_t: reset | save_map | pause | resume | shutdown"),
       text("status_channel", SVSLAM_FIELD(lcm.params.status_channel),
@@ -99,6 +101,7 @@ std::vector<ConfigSection> pipelineConfigSections() {
           scheduling("stereo", SVSLAM_FIELD(pipeline.stereo)),
           scheduling("estimator", SVSLAM_FIELD(pipeline.estimator)),
           scheduling("publisher", SVSLAM_FIELD(pipeline.publisher)),
+          scheduling("mapper", SVSLAM_FIELD(pipeline.mapper)),
           lcmSection(),
           serviceSection()};
 }

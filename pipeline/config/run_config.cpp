@@ -31,6 +31,7 @@ Status checkAcrossKeys(const std::string& file, const RunConfig& c) {
   SVSLAM_TRY(checkPipelineConfig(file, c.pipeline, c.lcm));
   if (Status s = o.validate(); !s) return Status::invalidArgument(file + ": " + s.message());
   if (Status s = c.slam.validate(); !s) return Status::invalidArgument(file + ": " + s.message());
+  if (Status s = c.dem.validate(); !s) return Status::invalidArgument(file + ": " + s.message());
   return Status::ok();
 }
 

@@ -4,11 +4,14 @@
 // range and doc, in run_config_keys.cpp / pipeline_config_keys.cpp; the reader and
 // `svslam config --defaults` (which prints config/svslam.yaml) derive from those tables.
 // Unknown keys, renamed keys and out-of-range values are rejected with a message naming the key.
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <set>
 #include <string>
 
 #include "core/status.hpp"
+#include "map/dem_params.hpp"
 #include "odometry/stereo_odometry.hpp"
 #include "pipeline/config/enum_names.hpp"
 #include "pipeline/config/pipeline_config.hpp"
@@ -34,6 +37,13 @@ struct RunConfig {
   PipelineConfig pipeline;  // pipeline.*: threads, queues, pacing, scheduling
   LcmConfig lcm;            // lcm.*: publishing and commands
   ServiceConfig service;    // service.*: systemd life cycle
+  // map.*: the elevation map (seed 001 sec 5.2; src/map/dem_params.hpp, map_frame.hpp).
+  bool map_enabled = true;  // the mapper stage runs
+  map::DemParams dem;
+  // Geodetic position of the map origin (WGS84 latitude, longitude in degrees, ellipsoidal
+  // altitude in metres) for georeferenced outputs; nullopt: the map stays in local metres.
+  std::optional<std::array<double, 3>> map_geo_origin;
+  double map_publish_period_s = 1.0;  // map tiles changed since the last period go to LCM, s
 };
 
 // Sets the worker threads and everything that follows them (the dense stereo stripes).

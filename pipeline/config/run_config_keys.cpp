@@ -251,8 +251,8 @@ ConfigSection odometry() {
 }  // namespace
 
 std::vector<ConfigSection> runConfigSections() {
-  return {topLevel(), detector(),    orb(),      stereoMatch(), temporalMatch(),
-          motion(),   denseStereo(), clusters(), odometry(),    slamConfigSection()};
+  return {topLevel(),    detector(), orb(),      stereoMatch(),       temporalMatch(),   motion(),
+          denseStereo(), clusters(), odometry(), slamConfigSection(), mapConfigSection()};
 }
 
 const std::vector<RenamedKey>& renamedConfigKeys() {
