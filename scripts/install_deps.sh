@@ -6,6 +6,8 @@ APT="apt-get -o DPkg::Lock::Timeout=600 -y -q"
 packages=(build-essential cmake pkg-config git
           libopencv-dev libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
           libyaml-cpp-dev
+          # elevation map files: GeoTIFF writer/reader (drivers/files/dem_files.cpp)
+          libgdal-dev
           # real-time pipeline and service: SPSC queues, LCM (lcm-gen, glib for lcm.pc),
           # sd_notify, cameras (libcamera, v4l-utils for real hardware), iproute2 + util-linux
           # for the multicast test in a private network namespace
