@@ -262,7 +262,8 @@ int runPipeline(const std::vector<std::string>& args) {
   const rt::PipelineReport& rep = runner.report();
   if (Status s = run::writeFileAtomic(out_dir + "/stats.json",
                                       run::statsJson(cfg, source_spec, work.summary(),
-                                                     work.outputs(), times, rep, error));
+                                                     work.outputs(), times, rep, error,
+                                                     work.mapJson(rep.after_publish_skipped)));
       !s)
     return fail(s);
   if (!error.empty()) return fail(Status::ioError(error));

@@ -26,13 +26,22 @@ inline constexpr EnumNames<EstimatorMode, 2> kEstimatorModeNames{
     {{"ekf", EstimatorMode::kEkf}, {"vo", EstimatorMode::kVo}}};
 const char* toString(EstimatorMode m);
 
+inline StereoOdometryParams runOdometryDefaults() {
+  StereoOdometryParams p;
+  p.dense = true;
+  p.dense_stereo.max_disp = 128;
+  return p;
+}
+
 struct RunConfig {
   std::string source = "synthetic";  // source specification (drivers/source/stereo_source.hpp)
   int max_frames = 0;                // 0 = the whole sequence
   int threads = 1;                   // worker threads of the stages that split work
   std::uint64_t seed = 1;            // seeds every random choice (RANSAC)
   EstimatorMode mode = EstimatorMode::kEkf;
-  StereoOdometryParams odometry;
+  // The library's defaults, except dense stereo: on in a run (it feeds the map and the EKF's
+  // 8-neighbour observation), searching 0..127 px.
+  StereoOdometryParams odometry = runOdometryDefaults();
   SlamSystemParams slam;
   PipelineConfig pipeline;  // pipeline.*: threads, queues, pacing, scheduling
   LcmConfig lcm;            // lcm.*: publishing and commands

@@ -177,10 +177,13 @@ ConfigSection motion() {
 }
 
 ConfigSection denseStereo() {
-  ConfigSection s{"dense_stereo", "optional dense census stereo (src/stereo/dense_stereo.hpp)", {}};
+  ConfigSection s{"dense_stereo", "dense census stereo (src/stereo/dense_stereo.hpp)", {}};
   s.keys = {
       flag("enabled", SVSLAM_FIELD(odometry.dense),
-           "true: disparity prior + 8-neighbour observation of seed 001 sec 4.1"),
+           "true: dense disparity for the map and as the prior of the stereo match"),
+      flag("observation", SVSLAM_FIELD(odometry.dense_observation),
+           "with enabled: 3D points by the 8-neighbour combination of seed 001 sec 4.1; false: "
+           "triangulation of the matched disparity"),
       choice("method", SVSLAM_FIELD(odometry.dense_stereo.cost), kCostNames,
              "matching cost: census (Hamming) or SAD"),
       number("census_w_px", SVSLAM_FIELD(odometry.dense_stereo.census_w), 3, 15, "px",

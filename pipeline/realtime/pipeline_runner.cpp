@@ -120,8 +120,13 @@ Status StageGraph::validate() const {
     if (!stages[i].work)
       return Status::invalidArgument("pipeline: stage '" + stages[i].name +
                                      "' has no work function");
-    // A displaced slot goes back to the source: only the source can take it.
-    if (i > 0 && stages[i].input == EdgePolicy::kNewest)
+    const bool last = i + 1 == stages.size();
+    if (stages[i].after_publish && (!last || i == 0))
+      return Status::invalidArgument("pipeline: stage '" + stages[i].name +
+                                     "': only the last stage, after another, runs after publication");
+    // A displaced slot goes back to the source: only the source (or the sink, for a stage after
+    // publication) can take it.
+    if (i > 0 && stages[i].input == EdgePolicy::kNewest && !stages[i].after_publish)
       return Status::invalidArgument("pipeline: stage '" + stages[i].name +
                                      "': only the first stage's input may keep the newest frame");
   }
@@ -138,7 +143,8 @@ Status PipelineOptions::validate() const {
 
 StageTimings::StageTimings(const StageGraph& graph) {
   names_.push_back(graph.source.name);
-  for (const StageSpec& s : graph.stages) names_.push_back(s.name);
+  for (const StageSpec& s : graph.stages)
+    if (!s.after_publish) names_.push_back(s.name);
   per_stage_.resize(names_.size());
 }
 
@@ -203,7 +209,12 @@ void PipelineRunner::finishReport() {
   for (std::size_t i = 0; i < names.size(); ++i)
     report_.stages.push_back({names[i], timings_.stage(i).summary()});
   report_.end_to_end = timings_.endToEnd().summary();
-  for (const EdgeReport& e : report_.edges) report_.dropped += e.drops;
+  for (std::size_t i = 0; i < report_.edges.size(); ++i) {
+    if (i < graph_.stages.size() && graph_.stages[i].after_publish)
+      report_.after_publish_skipped += report_.edges[i].drops;  // published, not processed
+    else
+      report_.dropped += report_.edges[i].drops;
+  }
 }
 
 Status PipelineRunner::runSequential(std::vector<std::unique_ptr<FrameSlot>>& slots,
@@ -221,7 +232,8 @@ Status PipelineRunner::runSequential(std::vector<std::unique_ptr<FrameSlot>>& sl
       break;
     }
     if (!*more) break;
-    for (std::size_t i = 0; i < graph_.stages.size() && error; ++i) {
+    const std::size_t n_main = numMainStages();
+    for (std::size_t i = 0; i < n_main && error; ++i) {
       slot.stamps.start_ns[i] = steadyNowNs();
       error = graph_.stages[i].work(slot);
       slot.stamps.end_ns[i] = steadyNowNs();
@@ -229,6 +241,12 @@ Status PipelineRunner::runSequential(std::vector<std::unique_ptr<FrameSlot>>& sl
     if (!error) break;
     timings_.record(slot);
     published_.fetch_add(1, std::memory_order_relaxed);
+    if (n_main < graph_.stages.size()) {  // the stage after publication, on every frame
+      slot.stamps.start_ns[n_main] = steadyNowNs();
+      error = graph_.stages[n_main].work(slot);
+      slot.stamps.end_ns[n_main] = steadyNowNs();
+      if (!error) break;
+    }
   }
   if (tick) tick();
   return error;
@@ -238,7 +256,12 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
                                    PipelineControl& control, const std::function<void()>& tick,
                                    int tick_ms) {
   const std::size_t n = graph_.stages.size();
+  const std::size_t n_main = numMainStages();
   BlockingEdge<FrameSlot> free_slots(slots.size() + 1);
+  // With a stage after publication, the sink hands slots back through its own ring (each ring
+  // has a single producer): those the side stage's newest-frame edge displaced, and failed ones.
+  BlockingEdge<FrameSlot> sink_returns(slots.size() + 1);
+  const bool side = n_main < n;
   for (auto& s : slots) free_slots.push(s.get());
   std::vector<std::unique_ptr<StageEdge>> edges;  // edges[i]: into stages[i]
   for (const StageSpec& s : graph_.stages)
@@ -269,7 +292,10 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
         slot = stash.back();
         stash.pop_back();
       }
-      while (!slot && !control.stop.load()) (void)free_slots.pop(slot, kPollTimeout);
+      while (!slot && !control.stop.load()) {
+        if (side && sink_returns.pop(slot, microseconds(0)) && slot) break;
+        (void)free_slots.pop(slot, side ? microseconds(1000) : kPollTimeout);
+      }
       if (!slot) break;
       auto more = capture.read(*slot);
       if (!more || !*more) {
@@ -289,7 +315,8 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
   for (std::size_t i = 0; i < n; ++i) {
     threads.emplace_back([&, i] {
       const StageSpec& stage = graph_.stages[i];
-      const bool sink = i + 1 == n;
+      const bool sink = i + 1 == n_main;
+      const bool after_publish = i >= n_main;
       threadStart(stage.name);
       bool this_stage_failed = false;
       for (;;) {
@@ -307,6 +334,10 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
             fail(s);
           }
         }
+        if (after_publish) {
+          free_slots.push(slot);
+          continue;
+        }
         if (!sink) {
           edges[i + 1]->push(slot);
           continue;
@@ -317,9 +348,15 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
           timings_.record(*slot);
           published_.fetch_add(1, std::memory_order_relaxed);
         }
-        free_slots.push(slot);
+        if (!side) {
+          free_slots.push(slot);
+        } else if (slot->failed) {
+          sink_returns.push(slot);
+        } else if (FrameSlot* skipped = edges[i + 1]->push(slot)) {
+          sink_returns.push(skipped);
+        }
       }
-      if (!sink) edges[i + 1]->close();
+      if (!after_publish && (!sink || side)) edges[i + 1]->close();
       running.fetch_sub(1);
     });
   }

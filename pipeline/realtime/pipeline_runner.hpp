@@ -61,6 +61,9 @@ class StageTimings {
 
 struct PipelineReport {
   std::int64_t captured = 0, published = 0, dropped = 0, failed = 0;
+  // Published frames the stage after publication (StageSpec::after_publish) skipped because it
+  // was still busy with an earlier one.
+  std::int64_t after_publish_skipped = 0;
   Status error;                     // first stage error (the run stopped there)
   std::vector<StageReport> stages;  // the source, then each stage, in order
   LatencySummary end_to_end;        // capture instant -> pose published
@@ -99,6 +102,10 @@ class PipelineRunner {
   Status runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slots, PipelineControl& control,
                      const std::function<void()>& tick, int tick_ms);
   void finishReport();
+  // Stages up to and including the sink (all but a stage after publication).
+  std::size_t numMainStages() const {
+    return graph_.stages.size() - (graph_.stages.back().after_publish ? 1 : 0);
+  }
 
   PipelineOptions options_;
   StageGraph graph_;

@@ -49,6 +49,14 @@ Status SlamStages::init() {
   estimator_clock_ = std::make_unique<Clock>(estimator_times_);
   publisher_ =
       std::make_unique<run::RunPublisher>(cfg_, out_dir_, estimator_->outputs(), lcm_, captured_);
+  if (cfg_.map_enabled) {
+    if (!cfg_.odometry.dense)
+      return Status::invalidArgument(
+          "map.enabled needs dense_stereo.enabled (the map is fused from dense stereo); set "
+          "map.enabled: false to run without the map");
+    map_stage_ = std::make_unique<MapStage>(cfg_, source_, out_dir_, lcm_);
+    if (Status s = map_stage_->init(estimator_->outputs().pose_covariance); !s) return s;
+  }
   Eigen::Isometry3d T;
   return publisher_->open(source_.groundTruth(0, T));
 }
@@ -61,6 +69,12 @@ StageGraph SlamStages::graph(EdgePolicy capture_input) {
   g.stages = {{"stereo", [this](FrameSlot& s) { return stereo(s); }, capture_input},
               {"estimator", [this](FrameSlot& s) { return estimate(s); }},
               {"publisher", [this](FrameSlot& s) { return publisher_->publish(s); }}};
+  if (map_stage_) {
+    StageSpec mapper{"mapper", [this](FrameSlot& s) { return map_stage_->process(s); },
+                     capture_input};
+    mapper.after_publish = true;
+    g.stages.push_back(std::move(mapper));
+  }
   g.on_thread_start = [this](const std::string& stage) { onThreadStart(stage); };
   return g;
 }
@@ -73,6 +87,7 @@ void SlamStages::onThreadStart(const std::string& stage) {
   if (stage == "stereo") sched = &p.stereo;
   if (stage == "estimator") sched = &p.estimator;
   if (stage == "publisher") sched = &p.publisher;
+  if (stage == "mapper") sched = &p.mapper;
   if (!sched || (sched->cpus.empty() && sched->fifo_priority == 0)) return;
   std::string warning;
   const Status s = service::applyToCurrentThread(*sched, warning);
@@ -170,6 +185,13 @@ void SlamStages::applySaveMap(TimeNs t_ns) {
   if (save_seq < 0) return;
   const std::string path = save_path.empty() ? out_dir_ + "/landmarks.ply" : save_path;
   const Status ws = writeMap(path);
+  if (map_stage_) {  // the mapper writes its files and answers for both
+    const std::size_t slash = path.find_last_of('/');
+    const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash);
+    map_stage_->requestSave(dir, save_seq,
+                            ws ? "map written to " + path + "; " : "error: " + ws.message() + "; ");
+    return;
+  }
   if (!lcm_) return;
   drivers::CommandStatus cs;
   cs.t_ns = t_ns;
@@ -203,15 +225,24 @@ void SlamStages::publishMapSummary(TimeNs t_ns) {
 
 Status SlamStages::finish() {
   publisher_->close();
-  if (estimator_ && estimator_->outputs().landmark_map)
-    return writeMap(out_dir_ + "/landmarks.ply");
-  return Status::ok();
+  Status s;
+  if (estimator_ && estimator_->outputs().landmark_map) s = writeMap(out_dir_ + "/landmarks.ply");
+  if (map_stage_) {
+    const Status ms = map_stage_->finish();
+    if (s) s = ms;
+  }
+  return s;
+}
+
+std::string SlamStages::mapJson(std::int64_t skipped_busy) const {
+  return map_stage_ ? map_stage_->json(skipped_busy) : std::string();
 }
 
 run::StageTimes SlamStages::stageTimes() const {
   run::StageTimes t = capture_times_;
   t.merge(stereo_times_);
   t.merge(estimator_times_);
+  if (map_stage_) t.merge(map_stage_->times());
   return t;
 }
 

@@ -7,7 +7,8 @@
 //              previous frame (a FeedbackCell: the only edge running backwards);
 //   estimator  the Estimator of the configured mode (vo or ekf), one call per frame; commands
 //              that touch the map (reset, save_map) are applied here, between two frames;
-//   publisher  the run's outputs (run/run_publisher.hpp): files, the pose and stats on LCM.
+//   publisher  the run's outputs (run/run_publisher.hpp): files, the pose and stats on LCM;
+//   mapper     (map.enabled) after publication, the elevation map (realtime/map_stage.hpp).
 // Each stage is owned once, here; the runner owns the threads, edges and timing.
 #include <atomic>
 #include <memory>
@@ -20,6 +21,7 @@
 #include "odometry/stereo_stage.hpp"
 #include "pipeline/config/run_config.hpp"
 #include "pipeline/realtime/edges.hpp"
+#include "pipeline/realtime/map_stage.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
 #include "pipeline/run/run_outputs.hpp"
 #include "pipeline/run/run_publisher.hpp"
@@ -45,7 +47,8 @@ class SlamStages {
   void setMaxFrames(int n) { max_frames_ = n; }
   // Commands (any thread): applied by the estimator before its next frame.
   void requestReset() { reset_requested_ = true; }
-  // Writes the map (landmarks.ply) to `path` (empty: <out>/landmarks.ply) after the next frame.
+  // Writes the map (landmarks.ply) to `path` (empty: <out>/landmarks.ply) after the next frame,
+  // and the elevation map files into the folder of `path` (mapper thread, after its next frame).
   void requestSaveMap(const std::string& path, std::int64_t command_seq);
 
   // After the run (stages stopped): closes the files, writes landmarks.ply.
@@ -56,6 +59,8 @@ class SlamStages {
   // Algorithm stage times (dense_stereo, detect, stereo_match, temporal_match, motion, ekf,
   // front_end = stereo + estimator work, load). Read after the run.
   run::StageTimes stageTimes() const;
+  // stats.json's "map" object (empty without the mapper); `skipped_busy` from the runner.
+  std::string mapJson(std::int64_t skipped_busy) const;
   // Warnings met while starting threads (scheduling not permitted), for the log.
   std::string takeWarnings();
 
@@ -100,6 +105,8 @@ class SlamStages {
   std::int64_t save_seq_ = -1;  // pending save_map command (-1: none)
   // Publisher thread.
   std::unique_ptr<run::RunPublisher> publisher_;
+  // Mapper thread (null when map.enabled is false).
+  std::unique_ptr<MapStage> map_stage_;
   std::mutex warn_mutex_;
   std::string warnings_;
 };

@@ -4,6 +4,8 @@
 // threads, the lock-free SPSC edges and the preallocated frame slots from this list, or runs the
 // same list on the calling thread (sequential). A linear chain:
 //   source -> stages[0] -> stages[1] -> ... -> stages[n-1] (the sink)
+// (or, when the last stage runs after publication, stages[n-2] is the sink and stages[n-1] a
+// side branch fed from it).
 // The source fills a free slot; each stage works on the slot it holds (no other stage holds it
 // then); after the sink the slot is published and goes back to the source's free-slot ring.
 #include <cstdint>
@@ -34,6 +36,11 @@ struct StageSpec {
   // the frames ahead of it are still published, this one and every later one are not.
   std::function<Status(FrameSlot&)> work;
   EdgePolicy input = EdgePolicy::kBlocking;  // the edge from the stage before
+  // A stage after publication (the last stage only, e.g. the mapper): the frame is published
+  // (timed, counted) when the stage before it finishes; this stage then gets it as a side
+  // branch. With a kNewest input it never delays the stages before it: a frame it has not
+  // taken when the next one arrives is skipped (PipelineReport::after_publish_skipped).
+  bool after_publish = false;
 };
 
 struct StageGraph {

@@ -50,7 +50,8 @@ std::string latency(const rt::LatencySummary& l) {
 
 std::string statsJson(const config::RunConfig& cfg, const std::string& source, const RunSummary& s,
                       EstimatorOutputs outputs, const StageTimes& times,
-                      const rt::PipelineReport& pipeline, const std::string& error) {
+                      const rt::PipelineReport& pipeline, const std::string& error,
+                      const std::string& map_json) {
   JsonObject fails;
   for (const auto& [reason, n] : s.failure_counts) fails.add(reason, n);
   std::string list = "[";
@@ -119,6 +120,7 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
   queues += "]";
   p.addRaw("queues", queues);
   j.addRaw("pipeline", p.str());
+  if (!map_json.empty()) j.addRaw("map", map_json);
   if (!error.empty()) j.add("error", error);
   return j.str() + "\n";
 }

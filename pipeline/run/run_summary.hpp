@@ -34,6 +34,7 @@ struct RunSummary {
 // when the estimator keeps a landmark map (`outputs`).
 std::string statsJson(const config::RunConfig& cfg, const std::string& source, const RunSummary& s,
                       EstimatorOutputs outputs, const StageTimes& times,
-                      const rt::PipelineReport& pipeline, const std::string& error);
+                      const rt::PipelineReport& pipeline, const std::string& error,
+                      const std::string& map_json = "");
 
 }  // namespace svslam::run

@@ -31,7 +31,10 @@ struct StereoOdometryParams {
   bool roi_tracking = false;
   FeatureClusterParams clusters;
   double unknown_threshold_factor = 0.25;  // (0, 1]
-  bool dense = false;  // dense stereo for the prior and the 8-neighbour observation
+  bool dense = false;  // dense stereo: the disparity prior of the stereo match (and the map)
+  // With dense: a point's 3D observation is the 8-neighbour combination of seed 001 sec 4.1;
+  // false: the triangulation of its matched disparity (dense then only guides the match).
+  bool dense_observation = true;
   DenseStereoParams dense_stereo;
   double match_sigma_px = 0.5;  // matching error between consecutive frames, px (seed 001 sec 4.1)
   double min_disparity_px = 1.0;  // points with a smaller disparity are not used, px, > 0

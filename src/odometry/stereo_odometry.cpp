@@ -71,7 +71,7 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left, const Stereo
   }
   if (stereo.has_rois && stereo.prev_regions.size() != prev_.size())
     return Status::invalidArgument("odometry: the stereo stage's ROIs are of another frame");
-  disp_ = stereo.has_disparity ? &stereo.disparity : nullptr;
+  disp_ = stereo.has_disparity && params_.dense_observation ? &stereo.disparity : nullptr;
   out.corners = static_cast<int>(stereo.corner_px.size());
   out.stereo_stats = stereo.stereo_stats;
   out.rois = stereo.rois;

@@ -140,7 +140,8 @@ Status StereoStage::finish(ImageView<const std::uint8_t> left, ImageView<const s
 
 void StereoStage::buildPoints(StereoStageOutput& out) const {
   out.points.clear();
-  const DisparityResult* disp = out.has_disparity ? &out.disparity : nullptr;
+  const DisparityResult* disp =
+      out.has_disparity && params_.dense_observation ? &out.disparity : nullptr;
   const double min_d =
       std::max(params_.min_disparity_px, calib_.f_px * calib_.baseline_m / params_.max_depth_m);
   for (const StereoMatch& m : out.stereo) {

@@ -1,0 +1,160 @@
+#include "pipeline/realtime/map_stage.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "pipeline/cli/json_writer.hpp"
+#include "drivers/files/dem_files.hpp"
+#include "drivers/lcm/lcm_map_tile.hpp"
+#include "map/map_frame.hpp"
+#include "pipeline/realtime/pipeline_runner.hpp"
+
+namespace svslam::rt {
+
+MapStage::MapStage(const config::RunConfig& cfg, drivers::StereoSource& source,
+                   std::string out_dir, drivers::LcmLink* lcm)
+    : cfg_(cfg), source_(source), out_dir_(std::move(out_dir)), lcm_(lcm) {}
+
+Status MapStage::init(bool pose_covariance) {
+  pose_covariance_ = pose_covariance;
+  std::array<double, 3> g = cfg_.dem.gravity_in_first_camera;
+  gravity_from_ = "config";
+  Eigen::Vector3d g_source;
+  if (source_.gravityInFirstCamera(g_source)) {
+    g = {g_source.x(), g_source.y(), g_source.z()};
+    gravity_from_ = "source";
+  }
+  if (Status s = map::mapRotationFromGravity(g, R_map_world_); !s) return s;
+  map_ = std::make_unique<map::DemMap>(cfg_.dem);
+  if (Status s = map_->initStatus(); !s) return s;
+  fuser_ = std::make_unique<map::DemFuser>(cfg_.dem, source_.calibration(), R_map_world_);
+  return fuser_->initStatus();
+}
+
+Status MapStage::process(FrameSlot& slot) {
+  const std::int64_t t0 = steadyNowNs();
+  map::DemFrame in;
+  in.left = slot.frame.left.cview();
+  in.disparity = slot.stereo.has_disparity ? &slot.stereo.disparity : nullptr;
+  in.T_world_cam = slot.result.T_world_cam;
+  if (pose_covariance_) in.pose_cov = slot.result.pose_cov;
+  in.t_ns = slot.frame.t_ns;
+  map::DemFuseStats st;
+  if (Status s = fuser_->process(in, *map_, st); !s)
+    return Status(s.code(), "map, frame " + std::to_string(slot.frame.index) + ": " + s.message());
+  if (st.skipped == map::DemSkip::kNone)
+    ++frames_fused_;
+  else
+    ++not_fused_[map::toString(st.skipped)];
+  totals_.fused += st.points_fused;
+  totals_.gated += st.points_gated;
+  totals_.not_finite += st.points_not_finite;
+  totals_.out_of_range += st.points_out_of_range;
+  totals_.no_tile += st.points_no_tile;
+  times_.add("map", static_cast<double>(steadyNowNs() - t0) * 1e-6);
+  if (lcm_) publishTiles(slot.frame.t_ns);
+  applySave(slot.frame.t_ns);
+  return Status::ok();
+}
+
+void MapStage::publishTiles(std::int64_t t_ns) {
+  const std::int64_t now = steadyNowNs();
+  if (now < next_publish_ns_) return;
+  next_publish_ns_ = now + static_cast<std::int64_t>(cfg_.map_publish_period_s * 1e9);
+  // A tile's last_seq is the fuser's number of the newest frame that wrote into it: above the
+  // newest of the last period, it has changed since.
+  std::int64_t newest = published_seq_;
+  for (const map::DemTile& t : map_->tiles()) {
+    newest = std::max(newest, t.last_seq);
+    if (t.last_seq <= published_seq_) continue;
+    map_->tileRaster(t, tile_raster_);
+    if (!drivers::encodeMapTile(tile_raster_, t.ti, t.tj, t_ns, tiles_published_, tile_bytes_))
+      continue;
+    if (lcm_->publishRaw(cfg_.lcm.params.map_tile_channel, tile_bytes_.data(),
+                         tile_bytes_.size()))
+      ++tiles_published_;
+  }
+  published_seq_ = newest;
+}
+
+void MapStage::requestSave(const std::string& dir, std::int64_t command_seq,
+                           const std::string& prefix) {
+  std::lock_guard<std::mutex> lock(save_mutex_);
+  save_dir_ = dir;
+  save_seq_ = command_seq;
+  save_prefix_ = prefix;
+}
+
+void MapStage::applySave(std::int64_t t_ns) {
+  std::string dir, prefix;
+  std::int64_t seq = -1;
+  {
+    std::lock_guard<std::mutex> lock(save_mutex_);
+    std::swap(seq, save_seq_);
+    dir = save_dir_.empty() ? out_dir_ : save_dir_;
+    prefix = save_prefix_;
+  }
+  if (seq < 0) return;
+  const Status ws = writeFiles(dir);
+  if (!lcm_) return;
+  drivers::CommandStatus cs;
+  cs.t_ns = t_ns;
+  cs.seq = seq;
+  cs.command = "save_map";
+  cs.ok = ws.isOk() && prefix.rfind("error", 0) != 0;
+  cs.message = prefix + (ws ? "elevation map written to " + dir : ws.message());
+  (void)lcm_->publishCommandStatus(cs);
+}
+
+Status MapStage::writeFiles(const std::string& dir) {
+  map::DemRaster r;
+  map_->toRaster(r);
+  drivers::GeoOrigin geo;
+  const drivers::GeoOrigin* g = nullptr;
+  if (cfg_.map_geo_origin) {
+    geo = {(*cfg_.map_geo_origin)[0], (*cfg_.map_geo_origin)[1], (*cfg_.map_geo_origin)[2]};
+    g = &geo;
+  }
+  if (Status s = drivers::writeDemGeoTiff(dir + "/dem.tif", r, g); !s) return s;
+  if (Status s = drivers::writeOrthoTiff(dir + "/ortho.tif", r, g); !s) return s;
+  if (Status s = drivers::writeOrthoPng(dir + "/ortho.png", r); !s) return s;
+  if (Status s = drivers::writeHillshadePng(dir + "/dem_hillshade.png", r); !s) return s;
+  map::DemRaster gt = r;
+  if (r.cols > 0 && source_.groundTruthDem(R_map_world_, gt))
+    return drivers::writeDemGeoTiff(dir + "/groundtruth_dem.tif", gt, g);
+  return Status::ok();
+}
+
+Status MapStage::finish() {
+  if (!map_) return Status::ok();
+  std::int64_t seq = -1;
+  {
+    std::lock_guard<std::mutex> lock(save_mutex_);
+    seq = save_seq_;
+  }
+  if (seq >= 0) applySave(0);  // a save_map that arrived after the last frame
+  return writeFiles(out_dir_);
+}
+
+std::string MapStage::json(std::int64_t skipped_busy) const {
+  cli::JsonObject reasons;
+  for (const auto& [reason, n] : not_fused_) reasons.add(reason, n);
+  cli::JsonObject j;
+  j.add("cell_m", cfg_.dem.cell_m, 3)
+      .add("gravity_from", gravity_from_)
+      .add("frames_fused", frames_fused_)
+      .add("frames_skipped_busy", skipped_busy)
+      .addRaw("frames_not_fused", reasons.str())
+      .add("points_fused", totals_.fused)
+      .add("points_gated", totals_.gated)
+      .add("points_not_finite", totals_.not_finite)
+      .add("points_out_of_range", totals_.out_of_range)
+      .add("points_no_tile", totals_.no_tile)
+      .add("tiles", map_ ? map_->numTiles() : 0)
+      .add("cell_bytes", static_cast<std::int64_t>(map_ ? map_->bytes() : 0))
+      .add("tiles_published", tiles_published_)
+      .add("map_median_ms", times_.median("map"), 3);
+  return j.str();
+}
+
+}  // namespace svslam::rt

@@ -1,0 +1,85 @@
+#pragma once
+// The mapper stage of `svslam run` (seed 001 sec 5.2): after each pose is published, the frame's
+// dense disparity is fused into the elevation map (src/map/dem_fuser.hpp) with the estimated
+// pose and covariance. It runs on its own thread after publication (StageSpec::after_publish):
+// live and paced, a frame it is too busy for is skipped and counted, never delaying a pose; as
+// fast as possible, it takes every frame (same map threaded or sequential).
+//
+// Outputs, written atomically at the end of the run (also after SIGTERM) and on the save_map
+// command: dem.tif (height, height sigma, count), ortho.tif, ortho.png, dem_hillshade.png, and
+// with a source that knows its terrain (synthetic) groundtruth_dem.tif on the same grid. On LCM,
+// every map.publish_period_s, each tile changed since the last period as a map_tile_t.
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "core/status.hpp"
+#include "drivers/lcm/lcm_transport.hpp"
+#include "drivers/source/stereo_source.hpp"
+#include "map/dem_fuser.hpp"
+#include "map/dem_map.hpp"
+#include "pipeline/config/run_config.hpp"
+#include "pipeline/realtime/frame_slot.hpp"
+#include "pipeline/run/run_outputs.hpp"
+
+namespace svslam::rt {
+
+class MapStage {
+ public:
+  // `source` and `lcm` (may be null) outlive this object.
+  MapStage(const config::RunConfig& cfg, drivers::StereoSource& source, std::string out_dir,
+           drivers::LcmLink* lcm);
+  // Gravity (the source's when it knows it, else map.gravity_in_first_camera), the map frame,
+  // the fuser. `pose_covariance`: the estimator's covariance is a pose covariance (ekf); else
+  // (vo) the map's sigmas are those of dense stereo alone.
+  Status init(bool pose_covariance);
+  // Mapper thread: fuses one published frame.
+  Status process(FrameSlot& slot);
+  // Any thread: write the map files into `dir` after the next frame (or at finish()); the
+  // answer on LCM carries `command_seq` and `prefix` (what the caller already did).
+  void requestSave(const std::string& dir, std::int64_t command_seq, const std::string& prefix);
+  // After the run: writes the map files into the output folder (and answers a pending save).
+  Status finish();
+  // stats.json's "map" object; `skipped_busy`: frames the runner skipped for this stage.
+  std::string json(std::int64_t skipped_busy) const;
+  const map::DemMap& map() const { return *map_; }
+  const run::StageTimes& times() const { return times_; }
+  const Eigen::Matrix3d& R_map_world() const { return R_map_world_; }
+
+ private:
+  Status writeFiles(const std::string& dir);
+  void applySave(std::int64_t t_ns);
+  void publishTiles(std::int64_t t_ns);
+
+  config::RunConfig cfg_;
+  drivers::StereoSource& source_;
+  std::string out_dir_;
+  drivers::LcmLink* lcm_;
+  bool pose_covariance_ = false;
+  Eigen::Matrix3d R_map_world_ = Eigen::Matrix3d::Identity();
+  std::string gravity_from_;  // "source" or "config"
+  std::unique_ptr<map::DemMap> map_;
+  std::unique_ptr<map::DemFuser> fuser_;
+  map::DemRaster tile_raster_;       // one tile, reused for LCM
+  std::vector<std::uint8_t> tile_bytes_;
+  std::int64_t published_seq_ = -1;  // tiles with last_seq above this are sent next period
+  std::int64_t next_publish_ns_ = 0;
+  std::int64_t tiles_published_ = 0;
+  // Counters (mapper thread; read after the run).
+  std::int64_t frames_fused_ = 0;
+  std::map<std::string, std::int64_t> not_fused_;  // reason -> frames
+  struct Totals {
+    std::int64_t fused = 0, gated = 0, not_finite = 0, out_of_range = 0, no_tile = 0;
+  } totals_;  // points
+  run::StageTimes times_;
+  // Pending save_map.
+  std::mutex save_mutex_;
+  std::string save_dir_, save_prefix_;
+  std::int64_t save_seq_ = -1;
+};
+
+}  // namespace svslam::rt
