@@ -17,6 +17,9 @@ class PreloadedSource final : public StereoSource {
   bool groundTruth(int index, Eigen::Isometry3d& T_first_cam) const override {
     return inner_->groundTruth(index, T_first_cam);
   }
+  bool gravityInFirstCamera(Eigen::Vector3d& g) const override {
+    return inner_->gravityInFirstCamera(g);
+  }
   // Starts again from the first frame (a benchmark replays the same frames twice).
   void rewind() { next_ = 0; }
 

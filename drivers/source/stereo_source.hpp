@@ -41,6 +41,12 @@ class StereoSource {
     (void)T_first_cam;
     return false;
   }
+  // Gravity direction (unit vector, pointing down) in the frame of the first left camera (x
+  // right, y down, z forward) when the source knows it (synthetic: exact). False otherwise.
+  virtual bool gravityInFirstCamera(Eigen::Vector3d& g) const {
+    (void)g;
+    return false;
+  }
 };
 
 Result<std::unique_ptr<StereoSource>> openKittiSource(const std::string& dir);

@@ -31,6 +31,11 @@ class SyntheticSource final : public StereoSource {
     T_first_cam = flight_.pose(0).inverse() * flight_.pose(index);
     return true;
   }
+  // World gravity (0, 0, -1) (z up) in the first left camera: R_C0_W (0, 0, -1).
+  bool gravityInFirstCamera(Eigen::Vector3d& g) const override {
+    g = flight_.pose(0).linear().transpose() * Eigen::Vector3d(0.0, 0.0, -1.0);
+    return true;
+  }
   const SyntheticFlight& flight() const { return flight_; }
 
  private:
