@@ -10,6 +10,7 @@ int runDisparity(const std::vector<std::string>& args);
 int runEvalDisparity(const std::vector<std::string>& args);
 int runFitSigma(const std::vector<std::string>& args);
 int runEvalTrajectory(const std::vector<std::string>& args);
+int runEvalDem(const std::vector<std::string>& args);  // tools/eval_dem_command.cpp
 int runPipeline(const std::vector<std::string>& args);
 int runConfig(const std::vector<std::string>& args);  // prints the documented defaults (YAML)
 int runListen(const std::vector<std::string>& args);  // cli/listen_command.cpp (LCM)

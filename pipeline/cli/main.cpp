@@ -20,6 +20,7 @@ constexpr const char* kUsage =
     "  run              visual odometry on a stereo sequence (default: built-in synthetic flight)\n"
     "  config           print the documented configuration of 'run' at its defaults (--defaults)\n"
     "  eval-trajectory  drift, ATE and RPE of a trajectory against ground truth (KITTI/TUM/EuRoC)\n"
+    "  eval-dem         accuracy and coverage of an elevation map (GeoTIFF) against ground truth\n"
 #ifdef SVSLAM_HAVE_LISTEN
     "  listen           print the poses (with covariance) and stats published on LCM\n"
 #endif
@@ -46,6 +47,7 @@ int main(int argc, char** argv) {
     if (cmd == "run") return svslam::cli::runPipeline(args);
     if (cmd == "config") return svslam::cli::runConfig(args);
     if (cmd == "eval-trajectory") return svslam::cli::runEvalTrajectory(args);
+    if (cmd == "eval-dem") return svslam::cli::runEvalDem(args);
 #ifdef SVSLAM_HAVE_LISTEN
     if (cmd == "listen") return svslam::cli::runListen(args);
 #endif
