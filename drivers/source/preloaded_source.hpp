@@ -20,6 +20,10 @@ class PreloadedSource final : public StereoSource {
   bool gravityInFirstCamera(Eigen::Vector3d& g) const override {
     return inner_->gravityInFirstCamera(g);
   }
+  bool groundTruthDem(const Eigen::Matrix3d& R_map_world, int frames,
+                      map::DemRaster& raster) const override {
+    return inner_->groundTruthDem(R_map_world, frames, raster);
+  }
   // Starts again from the first frame (a benchmark replays the same frames twice).
   void rewind() { next_ = 0; }
 

@@ -15,6 +15,7 @@
 #include "core/camera.hpp"
 #include "core/image.hpp"
 #include "core/status.hpp"
+#include "map/dem_raster.hpp"
 #include "core/time.hpp"
 
 namespace svslam::drivers {
@@ -45,6 +46,17 @@ class StereoSource {
   // right, y down, z forward) when the source knows it (synthetic: exact). False otherwise.
   virtual bool gravityInFirstCamera(Eigen::Vector3d& g) const {
     (void)g;
+    return false;
+  }
+  // The exact terrain height of the cells of `raster`'s window (its size and cell set by the
+  // caller) that the left camera saw in frames 0 .. frames - 1, in the map frame given by
+  // R_map_world (map/map_frame.hpp), when the source knows its terrain (synthetic); its count
+  // band: frames in which both cameras saw the cell. False (raster untouched) otherwise.
+  virtual bool groundTruthDem(const Eigen::Matrix3d& R_map_world, int frames,
+                              map::DemRaster& raster) const {
+    (void)R_map_world;
+    (void)frames;
+    (void)raster;
     return false;
   }
 };

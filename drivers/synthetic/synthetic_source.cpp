@@ -8,6 +8,7 @@
 
 #include "drivers/source/stereo_source.hpp"
 #include "drivers/synthetic/synthetic_flight.hpp"
+#include "drivers/synthetic/synthetic_dem.hpp"
 
 namespace svslam::drivers {
 namespace {
@@ -35,6 +36,11 @@ class SyntheticSource final : public StereoSource {
   bool gravityInFirstCamera(Eigen::Vector3d& g) const override {
     g = flight_.pose(0).linear().transpose() * Eigen::Vector3d(0.0, 0.0, -1.0);
     return true;
+  }
+  bool groundTruthDem(const Eigen::Matrix3d& R_map_world, int frames,
+                      map::DemRaster& raster) const override {
+    return syntheticGroundTruthDem(flight_, std::min(frames, flight_.size()), R_map_world, raster)
+        .isOk();
   }
   const SyntheticFlight& flight() const { return flight_; }
 

@@ -33,6 +33,7 @@ Status MapStage::init(bool pose_covariance) {
 
 Status MapStage::process(FrameSlot& slot) {
   const std::int64_t t0 = steadyNowNs();
+  frames_seen_ = std::max(frames_seen_, slot.frame.index + 1);
   map::DemFrame in;
   in.left = slot.frame.left.cview();
   in.disparity = slot.stereo.has_disparity ? &slot.stereo.disparity : nullptr;
@@ -120,7 +121,7 @@ Status MapStage::writeFiles(const std::string& dir) {
   if (Status s = drivers::writeOrthoPng(dir + "/ortho.png", r); !s) return s;
   if (Status s = drivers::writeHillshadePng(dir + "/dem_hillshade.png", r); !s) return s;
   map::DemRaster gt = r;
-  if (r.cols > 0 && source_.groundTruthDem(R_map_world_, gt))
+  if (r.cols > 0 && source_.groundTruthDem(R_map_world_, frames_seen_, gt))
     return drivers::writeDemGeoTiff(dir + "/groundtruth_dem.tif", gt, g);
   return Status::ok();
 }

@@ -71,6 +71,7 @@ class MapStage {
   std::int64_t tiles_published_ = 0;
   // Counters (mapper thread; read after the run).
   std::int64_t frames_fused_ = 0;
+  int frames_seen_ = 0;  // source frames 0 .. frames_seen_ - 1 reached the mapper (ground truth)
   std::map<std::string, std::int64_t> not_fused_;  // reason -> frames
   struct Totals {
     std::int64_t fused = 0, gated = 0, not_finite = 0, out_of_range = 0, no_tile = 0;
