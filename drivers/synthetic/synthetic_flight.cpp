@@ -72,6 +72,7 @@ SyntheticFlightParams SyntheticFlightParams::forVariant(FlightVariant v) {
 
 Status SyntheticFlightParams::validate() const {
   if (frames < 1 || frames > 100000) return outOfRange("frames", "in 1..100000");
+  if (loop_frames < 0 || loop_frames > 100000) return outOfRange("loop_frames", "in 0..100000");
   if (width < 32 || width > 8192) return outOfRange("width", "in 32..8192");
   if (height < 32 || height > 8192) return outOfRange("height", "in 32..8192");
   if (!inRange(baseline_m, 1e-6, 100.0)) return outOfRange("baseline_m", "in (0, 100]");
@@ -125,7 +126,8 @@ Result<SyntheticFlight> SyntheticFlight::create(const SyntheticFlightParams& par
 
 Eigen::Isometry3d SyntheticFlight::pose(int index) const {
   const auto& p = params_;
-  const double theta = 2.0 * kPi * static_cast<double>(index) / p.frames;
+  const int loop = p.loop_frames > 0 ? p.loop_frames : p.frames;
+  const double theta = 2.0 * kPi * static_cast<double>(index % loop) / loop;
   const double t_s = static_cast<double>(index) / p.rate_hz;
   Eigen::Vector3d pos(semi_a_m_ * std::cos(theta), semi_b_m_ * std::sin(theta), 0.0);
   if (p.variant == FlightVariant::kBlimp) {

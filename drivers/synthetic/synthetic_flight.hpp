@@ -59,6 +59,7 @@ bool parseFlightVariant(const std::string& s, FlightVariant& out);
 struct SyntheticFlightParams {
   FlightVariant variant = FlightVariant::kBlimp;
   int frames = 100;                // sequence length, 1..100000
+  int loop_frames = 0;             // frames per loop (the flight repeats it), 0 = frames
   int width = 1024;                // px, 32..8192
   int height = 768;                // px, 32..8192
   double baseline_m = 2.2;         // m, (0, 100]; rover 0.5

@@ -98,7 +98,7 @@ Result<SyntheticFlightParams> parseSyntheticOptions(const std::string& options) 
       return Status::invalidArgument("synthetic source: variant must be blimp or rover, not '" + v +
                                      "'");
   SyntheticFlightParams p = SyntheticFlightParams::forVariant(variant);
-  const std::map<std::string, int*> ints = {{"frames", &p.frames},
+  const std::map<std::string, int*> ints = {{"frames", &p.frames}, {"loop_frames", &p.loop_frames},
                                             {"width", &p.width},
                                             {"height", &p.height},
                                             {"supersample", &p.supersample}};

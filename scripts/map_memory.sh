@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Resident memory of `svslam run` while the map grows over a flight that repeats its loop:
+# RSS (VmRSS) when the progress line first reports >= 300 poses and at the end of the run
+# (1000 frames). The map only grows where new ground is seen, so after the first loop the
+# memory should stay flat (issue: within 5 %).
+#   scripts/map_memory.sh [SVSLAM_BINARY] [SOURCE]
+# Default source: the 512x384 synthetic blimp flight, 1000 frames, a loop every 100 frames.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=${1:-./build/pipeline/svslam}
+src=${2:-synthetic:width=512,height=384,frames=1000,loop_frames=100}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+printf 'pipeline:\n  progress_period_s: 0.5\n' > "$tmp/cfg.yaml"
+"$bin" run --source "$src" --config "$tmp/cfg.yaml" --out "$tmp/o" > "$tmp/out.json" 2> "$tmp/err" &
+pid=$!
+rss300="" last_rss="" last_n=0
+while kill -0 "$pid" 2> /dev/null; do
+  rss=$(awk '/VmRSS/ {print $2}' "/proc/$pid/status" 2> /dev/null || true)
+  n=$(grep -o 'progress: [0-9]*' "$tmp/err" | tail -1 | awk '{print $2}' || true)
+  n=${n:-0}
+  if [ -n "$rss" ]; then
+    last_rss=$rss
+    last_n=$n
+    if [ -z "$rss300" ] && [ "$n" -ge 300 ]; then rss300=$rss; n300=$n; fi
+  fi
+  sleep 0.2
+done
+wait "$pid"
+tiles=$(python3 -c "import json; print(json.load(open('$tmp/o/stats.json'))['map']['tiles'])")
+python3 - "$rss300" "$n300" "$last_rss" "$last_n" "$tiles" <<'PY'
+import json, sys
+r300, n300, rl, nl, tiles = (int(x) for x in sys.argv[1:])
+print(json.dumps({"poses_at_first": n300, "rss_first_kib": r300, "poses_at_last": nl,
+                  "rss_last_kib": rl, "growth_pct": round(100.0 * (rl - r300) / r300, 2),
+                  "map_tiles": tiles}))
+PY
