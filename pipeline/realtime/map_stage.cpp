@@ -3,16 +3,16 @@
 #include <algorithm>
 #include <cmath>
 
-#include "pipeline/cli/json_writer.hpp"
 #include "drivers/files/dem_files.hpp"
 #include "drivers/lcm/lcm_map_tile.hpp"
 #include "map/map_frame.hpp"
+#include "pipeline/cli/json_writer.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
 
 namespace svslam::rt {
 
-MapStage::MapStage(const config::RunConfig& cfg, drivers::StereoSource& source,
-                   std::string out_dir, drivers::LcmLink* lcm)
+MapStage::MapStage(const config::RunConfig& cfg, drivers::StereoSource& source, std::string out_dir,
+                   drivers::LcmLink* lcm)
     : cfg_(cfg), source_(source), out_dir_(std::move(out_dir)), lcm_(lcm) {}
 
 Status MapStage::init(bool pose_covariance) {
@@ -71,8 +71,7 @@ void MapStage::publishTiles(std::int64_t t_ns) {
     map_->tileRaster(t, tile_raster_);
     if (!drivers::encodeMapTile(tile_raster_, t.ti, t.tj, t_ns, tiles_published_, tile_bytes_))
       continue;
-    if (lcm_->publishRaw(cfg_.lcm.params.map_tile_channel, tile_bytes_.data(),
-                         tile_bytes_.size()))
+    if (lcm_->publishRaw(cfg_.lcm.params.map_tile_channel, tile_bytes_.data(), tile_bytes_.size()))
       ++tiles_published_;
   }
   published_seq_ = newest;

@@ -64,7 +64,7 @@ class MapStage {
   std::string gravity_from_;  // "source" or "config"
   std::unique_ptr<map::DemMap> map_;
   std::unique_ptr<map::DemFuser> fuser_;
-  map::DemRaster tile_raster_;       // one tile, reused for LCM
+  map::DemRaster tile_raster_;  // one tile, reused for LCM
   std::vector<std::uint8_t> tile_bytes_;
   std::int64_t published_seq_ = -1;  // tiles with last_seq above this are sent next period
   std::int64_t next_publish_ns_ = 0;

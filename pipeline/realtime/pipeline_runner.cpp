@@ -122,8 +122,9 @@ Status StageGraph::validate() const {
                                      "' has no work function");
     const bool last = i + 1 == stages.size();
     if (stages[i].after_publish && (!last || i == 0))
-      return Status::invalidArgument("pipeline: stage '" + stages[i].name +
-                                     "': only the last stage, after another, runs after publication");
+      return Status::invalidArgument(
+          "pipeline: stage '" + stages[i].name +
+          "': only the last stage, after another, runs after publication");
     // A displaced slot goes back to the source: only the source (or the sink, for a stage after
     // publication) can take it.
     if (i > 0 && stages[i].input == EdgePolicy::kNewest && !stages[i].after_publish)

@@ -61,6 +61,8 @@ class SlamStages {
   run::StageTimes stageTimes() const;
   // stats.json's "map" object (empty without the mapper); `skipped_busy` from the runner.
   std::string mapJson(std::int64_t skipped_busy) const;
+  // The mapper (null when map.enabled is false); its map is the mapper thread's.
+  const MapStage* mapStage() const { return map_stage_.get(); }
   // Warnings met while starting threads (scheduling not permitted), for the log.
   std::string takeWarnings();
 

@@ -73,7 +73,7 @@ class DemFuser {
  private:
   struct Point {
     std::int32_t i, j;
-    float h_m, var_indep, sigma_pose;
+    float h_m, var_indep, var_pose;
     std::uint32_t luminance;
   };
   struct Accumulator {

@@ -18,12 +18,36 @@ std::uint16_t encodeSigma(double sigma_m) {
   return static_cast<std::uint16_t>(std::clamp(c, 1.0, 65535.0));
 }
 
+std::uint16_t encodeVariance(double var_m2) {
+  if (!(var_m2 > 0.0)) return 0;
+  // log2(sigma) = log2(var) / 2; float precision is far below the 0.07 % step.
+  const float c = std::round(
+      (0.5f * std::log2(static_cast<float>(var_m2)) + static_cast<float>(kSigmaCodeOffset)) *
+      static_cast<float>(kSigmaCodeScale));
+  return static_cast<std::uint16_t>(std::clamp(c, 1.0f, 65535.0f));
+}
+
 double decodeSigma(std::uint16_t code) {
   if (code == 0) return 0.0;
   return std::exp2(static_cast<double>(code) / kSigmaCodeScale - kSigmaCodeOffset);
 }
 
-DemMap::DemMap(const DemParams& params) : params_(params), init_status_(params.validate()) {
+float decodeVariance(std::uint16_t code) {
+  static const std::vector<float> table = [] {
+    std::vector<float> t(65536);
+    for (std::size_t c = 0; c < t.size(); ++c) {
+      const double s = decodeSigma(static_cast<std::uint16_t>(c));
+      t[c] = static_cast<float>(s * s);
+    }
+    return t;
+  }();
+  return table[code];
+}
+
+DemMap::DemMap(const DemParams& params)
+    : params_(params),
+      init_status_(params.validate()),
+      min_var_(static_cast<float>(params.min_sigma_m * params.min_sigma_m)) {
   if (init_status_.isOk()) {
     tiles_.reserve(static_cast<std::size_t>(params_.max_tiles));
     index_.reserve(static_cast<std::size_t>(params_.max_tiles));
@@ -45,7 +69,7 @@ const DemTile* DemMap::tile(int ti, int tj) const {
   return &tiles_[static_cast<std::size_t>(it->second)];
 }
 
-DemTile* DemMap::findOrCreate(int ti, int tj) {
+DemTile* DemMap::tileForWrite(int ti, int tj) {
   if (const DemTile* t = tile(ti, tj)) return const_cast<DemTile*>(t);
   if (static_cast<int>(tiles_.size()) >= params_.max_tiles) return nullptr;
   DemTile t;
@@ -81,35 +105,42 @@ bool DemMap::estimate(int i, int j, double& height_m, double& sigma_m) const {
 bool DemMap::fuse(int i, int j, const CellMeasurement& m, std::int64_t seq, std::int64_t t_ns) {
   if (m.count == 0 || !(m.sum_w > 0.0)) return true;
   const int ti = tileOf(i), tj = tileOf(j);
-  DemTile* t = findOrCreate(ti, tj);
+  DemTile* t = tileForWrite(ti, tj);
   if (t == nullptr) return false;
   const int n = params_.tile_cells;
-  DemCell& c = t->cells[static_cast<std::size_t>((j - tj * n) * n + (i - ti * n))];
-  const double pose_mean = m.sum_sigma_pose / m.count;
-  const double lum_mean = static_cast<double>(m.sum_luminance) / m.count;
+  fuseCell(t->cells[static_cast<std::size_t>((j - tj * n) * n + (i - ti * n))], m);
+  touch(*t, seq, t_ns);
+  return true;
+}
+
+void DemMap::fuseCell(DemCell& c, const CellMeasurement& m) {
+  if (m.count == 0 || !(m.sum_w > 0.0)) return;
   if (c.count == 0) {
     c.height_m = static_cast<float>(m.sum_wh / m.sum_w);
-    c.sigma_indep = encodeSigma(1.0 / std::sqrt(m.sum_w));
-    c.sigma_pose = encodeSigma(pose_mean);
+    c.sigma_indep = encodeVariance(1.0 / m.sum_w);
+    c.sigma_pose = encodeVariance(m.sum_var_pose / m.count);
     c.count = static_cast<std::uint16_t>(std::min(m.count, kMaxCount));
-    c.luminance_8_8 = static_cast<std::uint16_t>(std::lround(lum_mean * 256.0));
-  } else {
-    const double si = decodeSigma(c.sigma_indep);
-    const double w_old = si > 0.0 ? 1.0 / (si * si) : 0.0;
-    const double w = w_old + m.sum_w;
-    c.height_m = static_cast<float>((w_old * c.height_m + m.sum_wh) / w);
-    c.sigma_indep = encodeSigma(1.0 / std::sqrt(w));
-    // Means over the points: the old cell counts as min(count, 65535) points.
-    const double n_old = c.count, n_new = n_old + m.count;
-    c.sigma_pose = encodeSigma((n_old * decodeSigma(c.sigma_pose) + m.sum_sigma_pose) / n_new);
-    const double lum = (n_old * c.luminance_8_8 + 256.0 * m.sum_luminance) / n_new;
-    c.luminance_8_8 = static_cast<std::uint16_t>(std::clamp(std::lround(lum), 0L, 65535L));
-    c.count = static_cast<std::uint16_t>(std::min<double>(n_new, kMaxCount));
+    c.luminance_8_8 = static_cast<std::uint16_t>(
+        std::min<std::uint32_t>((256u * m.sum_luminance + m.count / 2) / m.count, 65535u));
+    return;
   }
-  if (t->first_seq < 0) t->first_seq = seq;
-  t->last_seq = seq;
-  t->last_t_ns = t_ns;
-  return true;
+  const double vi = decodeVariance(c.sigma_indep);
+  const double w_old = vi > 0.0 ? 1.0 / vi : 0.0;
+  const double w = w_old + m.sum_w;
+  c.height_m = static_cast<float>((w_old * c.height_m + m.sum_wh) / w);
+  c.sigma_indep = encodeVariance(1.0 / w);
+  // Means over the points: the old cell counts as min(count, 65535) points.
+  const double n_old = c.count, n_new = n_old + m.count;
+  c.sigma_pose = encodeVariance((n_old * decodeVariance(c.sigma_pose) + m.sum_var_pose) / n_new);
+  const double lum = (n_old * c.luminance_8_8 + 256.0 * m.sum_luminance) / n_new;
+  c.luminance_8_8 = static_cast<std::uint16_t>(std::min(lum + 0.5, 65535.0));
+  c.count = static_cast<std::uint16_t>(std::min<double>(n_new, kMaxCount));
+}
+
+void DemMap::touch(DemTile& t, std::int64_t seq, std::int64_t t_ns) {
+  if (t.first_seq < 0) t.first_seq = seq;
+  t.last_seq = seq;
+  t.last_t_ns = t_ns;
 }
 
 std::size_t DemMap::bytes() const {

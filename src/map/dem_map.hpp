@@ -5,7 +5,7 @@
 // A cell holds the fusion of every height measurement that fell in it (dem_fuser.hpp):
 //   height_m      inverse-variance weighted mean of the heights, weights w = 1 / var_indep;
 //   sigma_indep   1 / sqrt(sum w): the independent (disparity) part of the height's error;
-//   sigma_pose    point-count weighted mean of the pose part of each point's height sigma. Pose
+//   sigma_pose    root mean square over the points of the pose part of their height sigma. Pose
 //                 errors are shared by every point of a frame and drift slowly from frame to
 //                 frame, so this part is not divided down by the number of points;
 //   count         points fused (saturates at 65535);
@@ -29,6 +29,10 @@ namespace svslam::map {
 // (2^-20 m .. 2^44 m, 0.07 % steps); code 0 is exactly 0.
 std::uint16_t encodeSigma(double sigma_m);
 double decodeSigma(std::uint16_t code);
+// decodeSigma(code)^2 as a float, from a table (no exp2 on the per-cell path).
+float decodeVariance(std::uint16_t code);
+// encodeSigma(sqrt(var_m2)), without the square root.
+std::uint16_t encodeVariance(double var_m2);
 
 struct DemCell {
   float height_m = 0.0f;
@@ -41,9 +45,9 @@ static_assert(sizeof(DemCell) == 12, "a cell is 12 bytes");
 
 // One frame's measurement of a cell, summed over its points (the fuser's accumulator).
 struct CellMeasurement {
-  double sum_w = 0.0;           // sum of 1 / var_indep, 1/m^2
-  double sum_wh = 0.0;          // sum of h / var_indep, 1/m
-  double sum_sigma_pose = 0.0;  // sum of the points' pose sigma, m
+  double sum_w = 0.0;         // sum of 1 / var_indep, 1/m^2
+  double sum_wh = 0.0;        // sum of h / var_indep, 1/m
+  double sum_var_pose = 0.0;  // sum of the points' pose variance, m^2
   std::uint32_t count = 0;
   std::uint32_t sum_luminance = 0;  // grey levels
 };
@@ -67,10 +71,20 @@ class DemMap {
   const DemCell* cell(int i, int j) const;
   // Height (m) and its total standard deviation (m) of cell (i, j); false when it has no data.
   bool estimate(int i, int j, double& height_m, double& sigma_m) const;
+  // Total variance (m^2) of a cell with data.
+  float variance(const DemCell& c) const {
+    return decodeVariance(c.sigma_indep) + decodeVariance(c.sigma_pose) + min_var_;
+  }
   // Fuses one frame's measurement into cell (i, j), creating its tile when needed. False when
   // the tile would exceed params.max_tiles (nothing written).
   bool fuse(int i, int j, const CellMeasurement& m, std::int64_t seq, std::int64_t t_ns);
 
+  // The tile (ti, tj), created when missing; null when that would exceed params.max_tiles.
+  DemTile* tileForWrite(int ti, int tj);
+  // Fuses one frame's measurement into a cell (nothing when it holds no point).
+  static void fuseCell(DemCell& c, const CellMeasurement& m);
+  // Records that fusion number `seq` (frame time t_ns) wrote into `t`.
+  static void touch(DemTile& t, std::int64_t seq, std::int64_t t_ns);
   // Tile of cell index i (floor division).
   int tileOf(int i) const;
   const std::vector<DemTile>& tiles() const { return tiles_; }
@@ -90,11 +104,11 @@ class DemMap {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(ti)) << 32) |
            static_cast<std::uint32_t>(tj);
   }
-  DemTile* findOrCreate(int ti, int tj);
   void fillRaster(const DemTile& tile, DemRaster& out) const;
 
   DemParams params_;
   Status init_status_;
+  float min_var_ = 0.0f;  // min_sigma_m^2
   std::vector<DemTile> tiles_;
   std::unordered_map<std::uint64_t, int> index_;  // key(ti, tj) -> tiles_ slot
   // Cache of the last tile looked up (points arrive in runs within one tile).

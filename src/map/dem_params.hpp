@@ -4,6 +4,7 @@
 // update. Units in the names; defaults are the values of config/svslam.yaml's `map:` section.
 #include <array>
 #include <cmath>
+
 #include "core/status.hpp"
 
 namespace svslam::map {
@@ -14,8 +15,8 @@ struct DemParams {
   // (x right, y down, z forward). [0, 0, 1]: a camera looking straight down (blimp);
   // [0, 1, 0]: a level, forward-looking camera (car).
   std::array<double, 3> gravity_in_first_camera{0.0, 0.0, 1.0};
-  int tile_cells = 64;          // tile side in cells (tiles are allocated on demand), [8, 1024]
-  double max_range_m = 60.0;    // points farther from the camera are not fused, m, > 0
+  int tile_cells = 64;            // tile side in cells (tiles are allocated on demand), [8, 1024]
+  double max_range_m = 60.0;      // points farther from the camera are not fused, m, > 0
   double min_disparity_px = 1.0;  // smaller disparities (far, imprecise) are not fused, px, > 0
   // Mahalanobis gate (chi-square, 1 dof) of a point's height against the cell's estimate; a
   // point beyond it has its variance inflated to sit on the gate instead of dragging the cell.

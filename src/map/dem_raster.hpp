@@ -15,9 +15,9 @@ struct DemRaster {
   int i0 = 0, j0 = 0;      // map index of column 0 and of the bottom row (rows - 1)
   int cols = 0, rows = 0;  // size, cells
   // Row-major, rows x cols. NaN where the cell has no data.
-  std::vector<float> height_m;  // mean height above the map origin (z up), m
-  std::vector<float> sigma_m;   // height standard deviation, m
-  std::vector<float> count;     // points fused into the cell (0 where no data)
+  std::vector<float> height_m;          // mean height above the map origin (z up), m
+  std::vector<float> sigma_m;           // height standard deviation, m
+  std::vector<float> count;             // points fused into the cell (0 where no data)
   std::vector<std::uint8_t> luminance;  // mean grey level; 0 where no data
 
   std::size_t index(int col, int row) const {

@@ -14,7 +14,7 @@ CellMeasurement measurement(double h, double sigma, int count, int lum) {
   const double w = 1.0 / (sigma * sigma);
   m.sum_w = w * count;
   m.sum_wh = w * h * count;
-  m.sum_sigma_pose = 0.0;
+  m.sum_var_pose = 0.0;
   m.count = static_cast<std::uint32_t>(count);
   m.sum_luminance = static_cast<std::uint32_t>(lum * count);
   return m;
@@ -73,7 +73,7 @@ TEST(DemMap, PoseSigmaIsAveragedNotShrunk) {
   p.min_sigma_m = 0.0;
   DemMap map(p);
   CellMeasurement m = measurement(0.0, 1e-3, 100, 0);
-  m.sum_sigma_pose = 0.05 * 100;  // every point 5 cm of pose sigma
+  m.sum_var_pose = 0.05 * 0.05 * 100;  // every point 5 cm of pose sigma
   ASSERT_TRUE(map.fuse(0, 0, m, 0, 0));
   ASSERT_TRUE(map.fuse(0, 0, m, 1, 0));
   double h = 0, s = 0;

@@ -33,8 +33,8 @@
 namespace {
 std::atomic<std::int64_t> g_allocations{0};
 // Per pipeline stage (thread_local tag set by CountingWork): 0 untagged, 1 capture, 2 stereo,
-// 3 estimator, 4 publisher.
-std::atomic<std::int64_t> g_stage_allocations[5] = {};
+// 3 estimator, 4 publisher, 5 mapper.
+std::atomic<std::int64_t> g_stage_allocations[6] = {};
 thread_local int t_stage = 0;
 std::atomic<bool> g_trace{false};  // SVSLAM_ALLOC_TRACE and inside the counted window
 #if SVSLAM_COUNT_ALLOCATIONS
@@ -126,8 +126,7 @@ TEST(Allocations, PipelineMachineryAllocatesNothingPerFrame) {
   for (bool keep_newest : {false, true}) {
     PipelineOptions o;
     QuietWork work(600, 100, 500);
-    PipelineRunner runner(
-        o, work.graph(keep_newest ? EdgePolicy::kNewest : EdgePolicy::kBlocking));
+    PipelineRunner runner(o, work.graph(keep_newest ? EdgePolicy::kNewest : EdgePolicy::kBlocking));
     auto slots = makeSlots(runner);
     PipelineControl control;
     ASSERT_TRUE(runner.run(slots, control, nullptr).isOk());
@@ -161,15 +160,29 @@ TEST(Allocations, StageTimesKeepTheNewestSamplesWithoutAllocating) {
 // published frames.
 class CountingWork {
  public:
-  static constexpr int kStages = 5;
-  CountingWork(int first, int last) : first_(first), last_(last) {}
+  static constexpr int kStages = 6;
+  // `work`, when given, is asked for the mapper's tile count.
+  CountingWork(int first, int last, const SlamStages* work = nullptr)
+      : first_(first), last_(last), work_(work) {}
   StageGraph wrap(StageGraph g) {
     auto read = g.source.read;
     g.source.read = [read](FrameSlot& s) {
       t_stage = 1;
       return read(s);
     };
-    for (std::size_t i = 0; i + 1 < g.stages.size(); ++i) {
+    std::size_t sink = g.stages.size() - 1;
+    if (g.stages.back().after_publish) {  // the mapper: counted over its own frames
+      --sink;
+      auto map = g.stages.back().work;
+      g.stages.back().work = [this, map](FrameSlot& s) {
+        t_stage = 5;
+        const Status st = map(s);
+        if (s.frame.index == first_) takeMapper(mapper_at_first_, tiles_at_first_);
+        if (s.frame.index == last_) takeMapper(mapper_at_last_, tiles_at_last_);
+        return st;
+      };
+    }
+    for (std::size_t i = 0; i < sink; ++i) {
       auto work = g.stages[i].work;
       const int tag = static_cast<int>(i) + 2;
       g.stages[i].work = [work, tag](FrameSlot& s) {
@@ -177,8 +190,8 @@ class CountingWork {
         return work(s);
       };
     }
-    auto publish = g.stages.back().work;
-    g.stages.back().work = [this, publish](FrameSlot& s) {
+    auto publish = g.stages[sink].work;
+    g.stages[sink].work = [this, publish](FrameSlot& s) {
       t_stage = 4;
       const Status st = publish(s);
       if (s.frame.index == first_) {
@@ -199,14 +212,25 @@ class CountingWork {
   }
   std::int64_t inWindow(int stage) const { return at_last_[stage] - at_first_[stage]; }
   bool windowSeen() const { return at_first_[0] >= 0 && at_last_[0] >= 0; }
+  // Mapper allocations between its frames first and last, and the tiles it created meanwhile.
+  std::int64_t mapperInWindow() const { return mapper_at_last_ - mapper_at_first_; }
+  int tilesCreatedInWindow() const { return tiles_at_last_ - tiles_at_first_; }
+  bool mapperWindowSeen() const { return mapper_at_first_ >= 0 && mapper_at_last_ >= 0; }
 
  private:
   void take(std::int64_t (&at)[kStages]) {
     for (int k = 0; k < kStages; ++k) at[k] = g_stage_allocations[k].load();
   }
+  void takeMapper(std::int64_t& allocations, int& tiles) {
+    allocations = g_stage_allocations[5].load();
+    tiles = work_ && work_->mapStage() ? work_->mapStage()->map().numTiles() : 0;
+  }
   int first_, last_;
-  std::int64_t at_first_[kStages] = {-1, -1, -1, -1, -1};
-  std::int64_t at_last_[kStages] = {-1, -1, -1, -1, -1};
+  const SlamStages* work_;
+  std::int64_t at_first_[kStages] = {-1, -1, -1, -1, -1, -1};
+  std::int64_t at_last_[kStages] = {-1, -1, -1, -1, -1, -1};
+  std::int64_t mapper_at_first_ = -1, mapper_at_last_ = -1;
+  int tiles_at_first_ = 0, tiles_at_last_ = 0;
 };
 
 // The window opens once every pooled slot has carried a frame (slotsNeeded = 11 with the default
@@ -223,17 +247,18 @@ TEST_P(FullWork, AllocatesNothingPerFrame) {
   if (!SVSLAM_COUNT_ALLOCATIONS)
     GTEST_SKIP() << "sanitizer build: the sanitizer's own operator new cannot be counted here";
   constexpr int kFirst = 30, kLast = 50, kFrames = 52;
-  auto src = drivers::openStereoSource("synthetic:width=320,height=240,frames=52");
+  // The flight repeats a 15-frame loop: from the window on, the map's tiles exist.
+  auto src = drivers::openStereoSource("synthetic:width=320,height=240,frames=52,loop_frames=15");
   ASSERT_TRUE(src.isOk()) << src.status().message();
   config::RunConfig cfg;
   cfg.threads = GetParam();
-  const std::string out = (std::filesystem::temp_directory_path() /
-                           ("svslam_alloc_" + std::to_string(::getpid())))
-                              .string();
+  const std::string out =
+      (std::filesystem::temp_directory_path() / ("svslam_alloc_" + std::to_string(::getpid())))
+          .string();
   std::filesystem::create_directories(out);
   SlamStages work(cfg, **src, out, nullptr);
   ASSERT_TRUE(work.init().isOk());
-  CountingWork counting(kFirst, kLast);
+  CountingWork counting(kFirst, kLast, &work);
   PipelineOptions o;
   PipelineRunner runner(o, counting.wrap(work.graph(EdgePolicy::kBlocking)));
   ASSERT_LT(runner.slotsNeeded(), kFirst);
@@ -247,14 +272,13 @@ TEST_P(FullWork, AllocatesNothingPerFrame) {
   EXPECT_EQ(frames, kFrames);
   EXPECT_GT(added, 0);  // landmarks were initialised: the filter did its full work
   const int n = kLast - kFirst;
-  std::printf("full svslam work (ekf, 320x240 synthetic, threads %d), heap allocations over %d "
-              "frames: capture %lld, stereo %lld, estimator %lld, publisher %lld, other threads "
-              "%lld\n",
-              GetParam(), n, static_cast<long long>(counting.inWindow(1)),
-              static_cast<long long>(counting.inWindow(2)),
-              static_cast<long long>(counting.inWindow(3)),
-              static_cast<long long>(counting.inWindow(4)),
-              static_cast<long long>(counting.inWindow(0)));
+  std::printf(
+      "full svslam work (ekf, 320x240 synthetic, threads %d), heap allocations over %d "
+      "frames: capture %lld, stereo %lld, estimator %lld, publisher %lld, other threads "
+      "%lld\n",
+      GetParam(), n, static_cast<long long>(counting.inWindow(1)),
+      static_cast<long long>(counting.inWindow(2)), static_cast<long long>(counting.inWindow(3)),
+      static_cast<long long>(counting.inWindow(4)), static_cast<long long>(counting.inWindow(0)));
   RecordProperty("stereo_allocations_in_window", std::to_string(counting.inWindow(2)));
   const char* where = " (SVSLAM_ALLOC_TRACE=1 prints where)";
   EXPECT_EQ(counting.inWindow(1), 0) << "capture" << where;
@@ -262,6 +286,12 @@ TEST_P(FullWork, AllocatesNothingPerFrame) {
   EXPECT_EQ(counting.inWindow(4), 0) << "publisher" << where;
   EXPECT_EQ(counting.inWindow(0), 0) << "pipeline threads and stage pools" << where;
   EXPECT_EQ(counting.inWindow(2), 0) << "stereo" << where;
+  // The mapper allocates only the tiles it creates (their cells and their index entry).
+  ASSERT_TRUE(counting.mapperWindowSeen());
+  std::printf("mapper: %lld heap allocations over %d frames, %d tiles created\n",
+              static_cast<long long>(counting.mapperInWindow()), n,
+              counting.tilesCreatedInWindow());
+  EXPECT_LE(counting.mapperInWindow(), 2 * counting.tilesCreatedInWindow()) << "mapper" << where;
 }
 
 INSTANTIATE_TEST_SUITE_P(Threads, FullWork, ::testing::Values(1, 2));
