@@ -195,7 +195,7 @@ std::vector<Eigen::Vector3d> dropPathStart(const std::vector<Eigen::Vector3d>& p
   double walked = 0;  // horizontal arc length up to path_map[k - 1], m
   for (std::size_t k = 1; k < path_map.size(); ++k) {
     const double step = (path_map[k] - path_map[k - 1]).head<2>().norm();
-    if (walked + step >= min_ahead_m && step > 0) {
+    if (walked + step > min_ahead_m) {  // a cut on a vertex starts at that vertex, once
       const double t = (min_ahead_m - walked) / step;
       std::vector<Eigen::Vector3d> out{path_map[k - 1] + t * (path_map[k] - path_map[k - 1])};
       out.insert(out.end(), path_map.begin() + static_cast<std::ptrdiff_t>(k), path_map.end());

@@ -61,7 +61,7 @@ Result<PathStripScore> scorePathStrip(const map::DemRaster& dem,
 
 // The path without its first min_ahead_m metres of horizontal length: starts at the point of
 // the polyline at that arc length (interpolated, z too), then the later points. Empty when the
-// path is shorter; the whole path when min_ahead_m <= 0.
+// path is not longer; the whole path when min_ahead_m <= 0.
 std::vector<Eigen::Vector3d> dropPathStart(const std::vector<Eigen::Vector3d>& path_map,
                                            double min_ahead_m);
 

@@ -263,6 +263,9 @@ TEST(DropPathStart, CutsAtTheHorizontalArcLength) {
   EXPECT_TRUE(out[0].isApprox(Eigen::Vector3d(2, 0, 3.5)));
   EXPECT_TRUE(out[1].isApprox(path[3]));
   EXPECT_EQ(dropPathStart(path, 0.0).size(), 4u);
+  out = dropPathStart(path, 1.0);  // on a vertex: that vertex once (the last at that length)
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_TRUE(out[0].isApprox(path[2]));
   EXPECT_TRUE(dropPathStart(path, 3.5).empty());
 }
 
