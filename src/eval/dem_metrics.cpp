@@ -8,6 +8,61 @@
 #include "map/dem_raster_check.hpp"
 
 namespace svslam {
+namespace {
+
+// Median of v (mean of the middle two for an even count); v is reordered. v must not be empty.
+double median(std::vector<double>& v) {
+  const std::size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + mid, v.end());
+  double m = v[mid];
+  if (v.size() % 2 == 0)  // the largest of the lower half sits before `mid`
+    m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + mid));
+  return m;
+}
+
+// Squared horizontal distance from (px, py) to the segment a-b, m^2.
+double segmentDistance2(double px, double py, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const double dx = b.x() - a.x(), dy = b.y() - a.y();
+  const double len2 = dx * dx + dy * dy;
+  double t = len2 > 0 ? ((px - a.x()) * dx + (py - a.y()) * dy) / len2 : 0.0;
+  t = std::clamp(t, 0.0, 1.0);
+  const double ex = a.x() + t * dx - px, ey = a.y() + t * dy - py;
+  return ex * ex + ey * ey;
+}
+
+// Raster indices (dem.index) of the cells with a height whose centre is within half_width_m of
+// the polyline, sorted, each once. Visits only each segment's grown bounding box.
+std::vector<std::size_t> stripCells(const map::DemRaster& dem,
+                                    const std::vector<Eigen::Vector3d>& path, double half_width_m) {
+  std::vector<std::size_t> cells;
+  const double w2 = half_width_m * half_width_m, cell = dem.cell_m;
+  for (std::size_t s = 0; s < path.size(); ++s) {
+    const Eigen::Vector3d& a = path[s];
+    const Eigen::Vector3d& b = path[s + 1 < path.size() ? s + 1 : s];
+    // Map indices of the cells whose centre (i + 0.5) cell_m lies in the grown box.
+    const auto lo = [&](double v) { return std::ceil((v - half_width_m) / cell - 0.5); };
+    const auto hi = [&](double v) { return std::floor((v + half_width_m) / cell - 0.5); };
+    const double i_lo = std::max<double>(lo(std::min(a.x(), b.x())), dem.i0);
+    const double i_hi = std::min<double>(hi(std::max(a.x(), b.x())), dem.i0 + dem.cols - 1.0);
+    const double j_lo = std::max<double>(lo(std::min(a.y(), b.y())), dem.j0);
+    const double j_hi = std::min<double>(hi(std::max(a.y(), b.y())), dem.j0 + dem.rows - 1.0);
+    if (i_lo > i_hi || j_lo > j_hi) continue;  // the box misses the raster
+    for (int j = static_cast<int>(j_lo); j <= static_cast<int>(j_hi); ++j) {
+      for (int i = static_cast<int>(i_lo); i <= static_cast<int>(i_hi); ++i) {
+        int c = 0, r = 0;
+        if (!dem.cellToPixel(i, j, c, r)) continue;
+        const std::size_t k = dem.index(c, r);
+        if (!std::isfinite(dem.height_m[k])) continue;
+        if (segmentDistance2((i + 0.5) * cell, (j + 0.5) * cell, a, b) <= w2) cells.push_back(k);
+      }
+    }
+  }
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  return cells;
+}
+
+}  // namespace
 
 Result<DemScore> scoreDem(const map::DemRaster& est, const map::DemRaster& gt) {
   if (Status s = map::checkDemRaster(est, "estimated DEM"); !s) return s;
@@ -57,14 +112,98 @@ Result<DemScore> scoreDem(const map::DemRaster& est, const map::DemRaster& gt) {
     s.rmse_m = std::sqrt(sum_e2 / n);
     s.bias_m = sum_e / n;
     s.within_2sigma = static_cast<double>(within) / n;
-    const std::size_t mid = abs_err.size() / 2;
-    std::nth_element(abs_err.begin(), abs_err.begin() + mid, abs_err.end());
-    s.median_abs_m = abs_err[mid];
-    if (abs_err.size() % 2 == 0)  // the largest of the lower half sits before `mid`
-      s.median_abs_m =
-          0.5 * (s.median_abs_m + *std::max_element(abs_err.begin(), abs_err.begin() + mid));
+    s.median_abs_m = median(abs_err);
   }
   return s;
+}
+
+Result<PathStripScore> scorePathStrip(const map::DemRaster& dem,
+                                      const std::vector<Eigen::Vector3d>& path_map,
+                                      double half_width_m) {
+  if (Status s = map::checkDemRaster(dem, "DEM"); !s) return s;
+  if (!std::isfinite(half_width_m) || half_width_m <= 0)
+    return Status::invalidArgument("path strip half-width must be finite and > 0, got " +
+                                   std::to_string(half_width_m) + " m");
+  PathStripScore s;
+  for (std::size_t k = 0; k < path_map.size(); ++k) {
+    if (!path_map[k].allFinite())
+      return Status::invalidArgument("path point " + std::to_string(k) + " is not finite");
+    if (k > 0) s.path_length_m += (path_map[k] - path_map[k - 1]).head<2>().norm();
+  }
+  const std::vector<std::size_t> cells = stripCells(dem, path_map, half_width_m);
+  s.strip_cells = static_cast<std::int64_t>(cells.size());
+  if (cells.empty()) return s;
+
+  // Cell centres (x, y) and heights, m; means for a centred (well-conditioned) fit.
+  const std::size_t n = cells.size();
+  std::vector<double> x(n), y(n), z(n), sigma;
+  double mx = 0, my = 0, mz = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    const auto c = static_cast<int>(cells[q] % static_cast<std::size_t>(dem.cols));
+    const auto r = static_cast<int>(cells[q] / static_cast<std::size_t>(dem.cols));
+    x[q] = (dem.i0 + c + 0.5) * dem.cell_m;
+    y[q] = (dem.j0 + dem.rows - 1 - r + 0.5) * dem.cell_m;
+    z[q] = dem.height_m[cells[q]];
+    if (std::isfinite(dem.sigma_m[cells[q]])) sigma.push_back(dem.sigma_m[cells[q]]);
+    mx += x[q];
+    my += y[q];
+    mz += z[q];
+  }
+  mx /= n;
+  my /= n;
+  mz /= n;
+  double sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0, szz = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    const double dx = x[q] - mx, dy = y[q] - my, dz = z[q] - mz;
+    sxx += dx * dx;
+    sxy += dx * dy;
+    syy += dy * dy;
+    sxz += dx * dz;
+    syz += dy * dz;
+    szz += dz * dz;
+  }
+  s.height_std_m = std::sqrt(szz / n);
+  if (!sigma.empty()) s.median_sigma_m = median(sigma);
+
+  // Normal equations of the centred fit dz = a dx + b dy; singular when the centres are on a line.
+  const double det = sxx * syy - sxy * sxy;
+  if (n < 3 || !(det > 1e-12 * (sxx + syy) * (sxx + syy))) return s;  // scale-free test
+  s.plane_a = (syy * sxz - sxy * syz) / det;
+  s.plane_b = (sxx * syz - sxy * sxz) / det;
+  s.plane_c = mz - s.plane_a * mx - s.plane_b * my;
+  std::vector<double> abs_r(n);
+  double sum_r2 = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    const double r = z[q] - (s.plane_a * x[q] + s.plane_b * y[q] + s.plane_c);
+    sum_r2 += r * r;
+    abs_r[q] = std::abs(r);
+  }
+  s.plane_residual_std_m = std::sqrt(sum_r2 / n);
+  const std::size_t rank = static_cast<std::size_t>(std::ceil(0.95 * n));  // 1-based, >= 1
+  std::nth_element(abs_r.begin(), abs_r.begin() + (rank - 1), abs_r.end());
+  s.plane_residual_p95_abs_m = abs_r[rank - 1];
+  double sum_h = 0;
+  for (const Eigen::Vector3d& p : path_map)
+    sum_h += p.z() - (s.plane_a * p.x() + s.plane_b * p.y() + s.plane_c);
+  s.camera_height_above_plane_m = sum_h / static_cast<double>(path_map.size());
+  return s;
+}
+
+std::vector<Eigen::Vector3d> dropPathStart(const std::vector<Eigen::Vector3d>& path_map,
+                                           double min_ahead_m) {
+  if (!(min_ahead_m > 0)) return path_map;
+  double walked = 0;  // horizontal arc length up to path_map[k - 1], m
+  for (std::size_t k = 1; k < path_map.size(); ++k) {
+    const double step = (path_map[k] - path_map[k - 1]).head<2>().norm();
+    if (walked + step > min_ahead_m) {  // a cut on a vertex starts at that vertex, once
+      const double t = (min_ahead_m - walked) / step;
+      std::vector<Eigen::Vector3d> out{path_map[k - 1] + t * (path_map[k] - path_map[k - 1])};
+      out.insert(out.end(), path_map.begin() + static_cast<std::ptrdiff_t>(k), path_map.end());
+      return out;
+    }
+    walked += step;
+  }
+  return {};
 }
 
 }  // namespace svslam

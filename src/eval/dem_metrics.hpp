@@ -6,7 +6,9 @@
 // must agree. A cell "has a height" when its height is finite. The observed area is the set of
 // ground-truth cells with a height; "common" cells have a height in both rasters. Errors are
 // e = est - gt, metres. Figures over an empty set are NaN (JSON null).
+#include <Eigen/Core>
 #include <cstdint>
+#include <vector>
 
 #include "core/status.hpp"
 #include "map/dem_raster.hpp"
@@ -32,5 +34,35 @@ struct DemScore {
 // Errors (invalidArgument, naming the raster): a malformed raster (checkDemRaster) or
 // different cell sizes (relative difference > 1e-9).
 Result<DemScore> scoreDem(const map::DemRaster& est, const map::DemRaster& gt);
+
+// Flatness of the ground a vehicle drove over: the "path strip" is the set of cells with a
+// height whose centre (x, y) lies within half_width_m (horizontal distance, m) of the polyline
+// of the path's (x, y). A plane z = a x + b y + c is fitted to the strip's heights by least
+// squares; its residuals are the flatness without the road's slope. Figures over an empty set,
+// or plane figures when the strip does not fix a plane (< 3 cells, or all on one line), are NaN.
+struct PathStripScore {
+  std::int64_t strip_cells = 0;  // cells of the strip with a height
+  double path_length_m = 0;      // horizontal length of the polyline, m
+  double height_std_m = NAN;     // standard deviation (1/n) of the strip's heights, m
+  double plane_a = NAN, plane_b = NAN, plane_c = NAN;  // z = a x + b y + c (m/m, m/m, m)
+  double plane_residual_std_m = NAN;                   // sqrt(mean r^2), r = height - plane, m
+  double plane_residual_p95_abs_m = NAN;               // 95th percentile of |r| (nearest rank), m
+  double median_sigma_m = NAN;  // median sigma band over the strip (finite ones), m
+  // Mean over the path points of z - plane(x, y), m: the camera's height above the road.
+  double camera_height_above_plane_m = NAN;
+};
+
+// path_map: positions in the map frame (x, y horizontal, z up), m, in driving order.
+// Errors (invalidArgument): a malformed raster, half_width_m not finite or <= 0, a non-finite
+// path point. Cost: the cells of each segment's bounding box grown by half_width_m.
+Result<PathStripScore> scorePathStrip(const map::DemRaster& dem,
+                                      const std::vector<Eigen::Vector3d>& path_map,
+                                      double half_width_m);
+
+// The path without its first min_ahead_m metres of horizontal length: starts at the point of
+// the polyline at that arc length (interpolated, z too), then the later points. Empty when the
+// path is not longer; the whole path when min_ahead_m <= 0.
+std::vector<Eigen::Vector3d> dropPathStart(const std::vector<Eigen::Vector3d>& path_map,
+                                           double min_ahead_m);
 
 }  // namespace svslam

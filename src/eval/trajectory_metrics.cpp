@@ -158,7 +158,8 @@ Result<NeesResult> evaluateNees(const std::vector<Eigen::Isometry3d>& gt,
   int in2 = 0, in2_pos = 0;
   for (std::size_t i = 0; i < gt.size(); ++i) {
     const Eigen::Matrix<double, 6, 6>& P = cov[i];
-    if (!P.allFinite()) return Status::invalidArgument("NEES: covariance " + std::to_string(i) + " is not finite");
+    if (!P.allFinite())
+      return Status::invalidArgument("NEES: covariance " + std::to_string(i) + " is not finite");
     Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(P);
     if (llt.info() != Eigen::Success || P.diagonal().minCoeff() <= 0) continue;
     const Eigen::Isometry3d G = g0 * gt[i], E = e0 * est[i];

@@ -5,6 +5,9 @@
 
 #include <cmath>
 #include <initializer_list>
+#include <random>
+#include <set>
+#include <vector>
 
 namespace svslam {
 namespace {
@@ -138,6 +141,132 @@ TEST(DemMetrics, BadInputIsAnError) {
   est = gt;
   est.i0 = 2147483647;
   EXPECT_FALSE(scoreDem(est, gt).isOk());
+}
+
+// A tilted road z = 0.05 x + 0.02 y - 1.65 (m) with Gaussian noise of 0.02 m, 0.1 m cells over
+// x in [-5, 15], y in [-5, 5]; sigma band 0.03 m. The camera drives along x at z = 0.
+class PathStrip : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dem.cell_m = 0.1;
+    dem.i0 = -50;
+    dem.j0 = -50;
+    dem.resize(200, 100);
+    std::mt19937 rng(7);
+    std::normal_distribution<double> noise(0.0, 0.02);
+    for (int r = 0; r < dem.rows; ++r) {
+      for (int c = 0; c < dem.cols; ++c) {
+        const double x = (dem.i0 + c + 0.5) * 0.1, y = (dem.j0 + dem.rows - 1 - r + 0.5) * 0.1;
+        dem.height_m[dem.index(c, r)] = static_cast<float>(0.05 * x + 0.02 * y - 1.65 + noise(rng));
+        dem.sigma_m[dem.index(c, r)] = 0.03f;
+        dem.count[dem.index(c, r)] = 4;
+      }
+    }
+    for (int k = 0; k <= 100; ++k) path.emplace_back(0.1 * k, 0.0, 0.0);  // x 0..10 m
+  }
+  // Cells with a height within half_width_m of the path: every cell against every segment.
+  std::int64_t bruteForceStrip(double half_width_m) const {
+    std::int64_t n = 0;
+    for (int r = 0; r < dem.rows; ++r) {
+      for (int c = 0; c < dem.cols; ++c) {
+        if (!std::isfinite(dem.height_m[dem.index(c, r)])) continue;
+        const Eigen::Vector2d p((dem.i0 + c + 0.5) * dem.cell_m,
+                                (dem.j0 + dem.rows - 1 - r + 0.5) * dem.cell_m);
+        bool in = false;
+        for (std::size_t s = 0; s + 1 < path.size() && !in; ++s) {
+          const Eigen::Vector2d a = path[s].head<2>(), b = path[s + 1].head<2>();
+          if ((b - a).squaredNorm() == 0) continue;  // a point: the neighbours cover it
+          const double t = std::clamp((p - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+          in = (a + t * (b - a) - p).norm() <= half_width_m;
+        }
+        n += in ? 1 : 0;
+      }
+    }
+    return n;
+  }
+  map::DemRaster dem;
+  std::vector<Eigen::Vector3d> path;
+};
+
+TEST_F(PathStrip, PlaneResidualsAreTheNoiseAndTheSlopeIsInTheHeightStd) {
+  int c = 0, r = 0;
+  ASSERT_TRUE(dem.cellToPixel(50, 30, c, r));  // (5.05, 3.05): 3 m beside the path
+  dem.height_m[dem.index(c, r)] = 1000.0f;
+  ASSERT_TRUE(dem.cellToPixel(50, 0, c, r));  // on the path, no data: not counted
+  dem.height_m[dem.index(c, r)] = NAN;
+  auto s = scorePathStrip(dem, path, 1.0);
+  ASSERT_TRUE(s.isOk()) << s.status().message();
+  EXPECT_EQ(s->strip_cells, bruteForceStrip(1.0));
+  EXPECT_GT(s->strip_cells, 2000);
+  EXPECT_NEAR(s->path_length_m, 10.0, 1e-9);
+  EXPECT_NEAR(s->plane_a, 0.05, 0.002);
+  EXPECT_NEAR(s->plane_b, 0.02, 0.005);
+  EXPECT_NEAR(s->plane_residual_std_m, 0.02, 0.001);
+  EXPECT_NEAR(s->plane_residual_p95_abs_m, 1.96 * 0.02, 0.003);
+  // The slope: 0.05 m/m over 12 m of strip gives a std of about 0.05 * 12 / sqrt(12) = 0.17 m.
+  EXPECT_GT(s->height_std_m, 0.15);
+  EXPECT_LT(s->height_std_m, 0.2);
+  EXPECT_FLOAT_EQ(s->median_sigma_m, 0.03f);
+  // 1.65 - 0.05 x above the road, x = 0..10 m along the path: 1.40 m on average.
+  EXPECT_NEAR(s->camera_height_above_plane_m, 1.40, 0.003);
+}
+
+TEST_F(PathStrip, BoundingBoxesSelectTheSameCellsAsBruteForce) {
+  path = {{-2.0, -1.0, 0.0}, {1.0, 2.5, 0.1}, {1.0, 2.5, 0.1}, {4.3, -0.7, 0.0}, {9.0, 4.0, 0.0}};
+  for (const double w : {0.05, 0.5, 1.37}) {
+    auto s = scorePathStrip(dem, path, w);
+    ASSERT_TRUE(s.isOk());
+    EXPECT_EQ(s->strip_cells, bruteForceStrip(w)) << w;
+  }
+}
+
+TEST_F(PathStrip, EmptyStripGivesNulls) {
+  for (auto& p : path) p.y() += 50.0;  // beside the raster
+  auto s = scorePathStrip(dem, path, 1.0);
+  ASSERT_TRUE(s.isOk());
+  EXPECT_EQ(s->strip_cells, 0);
+  EXPECT_NEAR(s->path_length_m, 10.0, 1e-9);
+  EXPECT_TRUE(std::isnan(s->height_std_m));
+  EXPECT_TRUE(std::isnan(s->plane_residual_std_m));
+  EXPECT_TRUE(std::isnan(s->plane_residual_p95_abs_m));
+  EXPECT_TRUE(std::isnan(s->median_sigma_m));
+  EXPECT_TRUE(std::isnan(s->camera_height_above_plane_m));
+  s = scorePathStrip(dem, {}, 1.0);
+  ASSERT_TRUE(s.isOk());
+  EXPECT_EQ(s->strip_cells, 0);
+}
+
+TEST_F(PathStrip, CellsOnOneLineFixNoPlane) {
+  for (auto& p : path) p.y() = 0.05;  // on the centres of row j = 0; the next rows are 0.1 away
+  auto s = scorePathStrip(dem, path, 0.03);
+  ASSERT_TRUE(s.isOk());
+  EXPECT_EQ(s->strip_cells, 100);  // x centres 0.05 .. 9.95 m
+  EXPECT_FALSE(std::isnan(s->height_std_m));
+  EXPECT_TRUE(std::isnan(s->plane_residual_std_m));
+  EXPECT_TRUE(std::isnan(s->camera_height_above_plane_m));
+}
+
+TEST_F(PathStrip, BadInputIsAnError) {
+  EXPECT_FALSE(scorePathStrip(dem, path, 0.0).isOk());
+  EXPECT_FALSE(scorePathStrip(dem, path, NAN).isOk());
+  path[3].x() = NAN;
+  EXPECT_FALSE(scorePathStrip(dem, path, 1.0).isOk());
+  path[3].x() = 0.3;
+  dem.count.pop_back();
+  EXPECT_FALSE(scorePathStrip(dem, path, 1.0).isOk());
+}
+
+TEST(DropPathStart, CutsAtTheHorizontalArcLength) {
+  const std::vector<Eigen::Vector3d> path{{0, 0, 0}, {1, 0, 0}, {1, 0, 5}, {3, 0, 2}};
+  auto out = dropPathStart(path, 2.0);  // the vertical step has no horizontal length
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_TRUE(out[0].isApprox(Eigen::Vector3d(2, 0, 3.5)));
+  EXPECT_TRUE(out[1].isApprox(path[3]));
+  EXPECT_EQ(dropPathStart(path, 0.0).size(), 4u);
+  out = dropPathStart(path, 1.0);  // on a vertex: that vertex once (the last at that length)
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_TRUE(out[0].isApprox(path[2]));
+  EXPECT_TRUE(dropPathStart(path, 3.5).empty());
 }
 
 }  // namespace

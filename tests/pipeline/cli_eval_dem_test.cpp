@@ -1,5 +1,6 @@
 // svslam eval-dem end to end: two small DEMs written with the GeoTIFF writer, the JSON numbers,
-// and clear errors with a non-zero exit for missing, corrupt or mismatched files.
+// and clear errors with a non-zero exit for missing, corrupt or mismatched files; the path mode
+// on a tilted road and a straight KITTI trajectory.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -94,6 +95,78 @@ TEST_F(CliEvalDem, HelpAndBadInput) {
   expectError("eval-dem --dem " + path("coarse.tif") + " --gt " + path("gt.tif"), "cell size");
   ASSERT_TRUE(svslam::drivers::writeOrthoTiff(path("ortho.tif"), coarse).isOk());
   expectError("eval-dem --dem " + path("ortho.tif") + " --gt " + path("gt.tif"), "band count");
+}
+
+// A road z = 0.05 y - 1.65 m in 0.5 m cells over x in [-2, 2], y in [-1, 5] (map frame), and a
+// KITTI trajectory driving 4 m along the camera's z; gravity 0,1,0 (camera y down) makes the
+// map's y the camera's z, so the path is (0, 0..4, 0) in the map.
+class CliEvalDemPath : public CliEvalDem {
+ protected:
+  void SetUp() override {
+    CliEvalDem::SetUp();
+    svslam::map::DemRaster road;
+    road.cell_m = 0.5;
+    road.i0 = -4;
+    road.j0 = -2;
+    road.resize(8, 12);
+    for (int r = 0; r < road.rows; ++r) {
+      for (int c = 0; c < road.cols; ++c) {
+        const double y = (road.j0 + road.rows - 1 - r + 0.5) * road.cell_m;
+        road.height_m[road.index(c, r)] = static_cast<float>(0.05 * y - 1.65);
+        road.sigma_m[road.index(c, r)] = 0.1f;
+        road.count[road.index(c, r)] = 3;
+      }
+    }
+    road.height_m[road.index(7, 5)] = 100.0f;  // (1.75, 2.25): beside the strip
+    ASSERT_TRUE(svslam::drivers::writeDemGeoTiff(path("road.tif"), road).isOk());
+    std::ofstream traj(path("traj.txt"));
+    for (int k = 0; k <= 4; ++k) traj << "1 0 0 0 0 1 0 0 0 0 1 " << k << "\n";
+  }
+  std::string pathArgs(const std::string& extra) const {
+    return "eval-dem --dem " + path("road.tif") + " --path " + path("traj.txt") +
+           " --gravity 0,1,0 " + extra;
+  }
+};
+
+TEST_F(CliEvalDemPath, PrintsTheFlatnessOfThePathStrip) {
+  std::string out, err;
+  ASSERT_EQ(run(pathArgs(""), out, err), 0) << err;
+  // Within 1 m of x = 0, y in [0, 4]: 4 columns x 8 rows, and 4 + 2 cells on each cap.
+  // The camera is 1.65 - 0.05 y above the road: 1.55 m on average over y = 0..4.
+  for (const char* field :
+       {"\"strip_cells\": 44", "\"path_length_m\": 4.000", "\"half_width_m\": 1.000",
+        "\"plane_residual_std_m\": 0.0000", "\"plane_residual_p95_abs_m\": 0.0000",
+        "\"median_sigma_m\": 0.1000", "\"camera_height_above_plane_m\": 1.5500"})
+    EXPECT_NE(out.find(field), std::string::npos) << field << " in " << out;
+  EXPECT_EQ(out.find("\"height_std_m\": 0.0000"), std::string::npos) << out;  // the slope
+  EXPECT_TRUE(err.empty()) << err;
+
+  // Without the first 2 m: y in [2, 4], 4 x 4 cells and 6 on each cap; the camera 1.5 m above.
+  ASSERT_EQ(run(pathArgs("--min-ahead-m 2"), out, err), 0) << err;
+  for (const char* field : {"\"strip_cells\": 28", "\"path_length_m\": 2.000",
+                            "\"camera_height_above_plane_m\": 1.5000"})
+    EXPECT_NE(out.find(field), std::string::npos) << field << " in " << out;
+}
+
+TEST_F(CliEvalDemPath, EmptyStripAndBadInput) {
+  std::ofstream(path("far.txt")) << "1 0 0 100 0 1 0 0 0 0 1 0\n1 0 0 100 0 1 0 0 0 0 1 1\n";
+  std::string out, err;
+  ASSERT_EQ(run("eval-dem --dem " + path("road.tif") + " --path " + path("far.txt"), out, err), 0)
+      << err;
+  for (const char* field :
+       {"\"strip_cells\": 0", "\"height_std_m\": null", "\"plane_residual_std_m\": null",
+        "\"median_sigma_m\": null", "\"camera_height_above_plane_m\": null"})
+    EXPECT_NE(out.find(field), std::string::npos) << field << " in " << out;
+
+  expectError("eval-dem --dem " + path("road.tif"), "--path");
+  expectError(pathArgs("--gt " + path("gt.tif")), "not both");
+  expectError(pathArgs("").substr(0, pathArgs("").find(" --gravity")) + " --gravity 0,1",
+              "--gravity");
+  expectError(pathArgs("").substr(0, pathArgs("").find(" --gravity")) + " --gravity 0,0,0",
+              "gravity");
+  expectError(pathArgs("--half-width-m 0"), "half-width");
+  expectError(pathArgs("--min-ahead-m -1"), "--min-ahead-m");
+  expectError("eval-dem --dem " + path("road.tif") + " --path " + path("none.txt"), "none.txt");
 }
 
 }  // namespace
