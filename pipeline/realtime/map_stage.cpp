@@ -90,11 +90,11 @@ void MapStage::applySave(std::int64_t t_ns) {
   std::int64_t seq = -1;
   {
     std::lock_guard<std::mutex> lock(save_mutex_);
+    if (save_seq_ < 0) return;  // nothing pending (and nothing copied: no allocation)
     std::swap(seq, save_seq_);
     dir = save_dir_.empty() ? out_dir_ : save_dir_;
     prefix = save_prefix_;
   }
-  if (seq < 0) return;
   const Status ws = writeFiles(dir);
   if (!lcm_) return;
   drivers::CommandStatus cs;

@@ -19,7 +19,8 @@ Status StereoMatchParams::validate() const {
     return Status::invalidArgument("stereo_match.ratio must be in (0, 1]");
   if (!(ratio_floor >= 0.0f && ratio_floor <= 1.0f))
     return Status::invalidArgument("stereo_match.ratio_floor must be in 0..1");
-  if (prior_radius_px < 1) return Status::invalidArgument("stereo_match.prior_radius_px must be >= 1");
+  if (prior_radius_px < 1)
+    return Status::invalidArgument("stereo_match.prior_radius_px must be >= 1");
   if (!(continuity_threshold_px > 0.0f))
     return Status::invalidArgument("stereo_match.continuity_threshold_px must be > 0");
   if (!(recovery_dist_th_px > 0.0f))
@@ -36,7 +37,8 @@ Status StereoMatchParams::validate() const {
     return Status::invalidArgument("stereo_match.sigma_model: " + s.message());
   if (subpixel != SubpixelMethod::kParabola && subpixel != SubpixelMethod::kRefine)
     return Status::invalidArgument("stereo_match.subpixel must be parabola or refine");
-  if (Status s = refine.validate(); !s) return Status::invalidArgument("stereo_match." + s.message());
+  if (Status s = refine.validate(); !s)
+    return Status::invalidArgument("stereo_match." + s.message());
   return Status::ok();
 }
 
@@ -44,6 +46,10 @@ StereoPointMatcher::StereoPointMatcher(const StereoMatchParams& params)
     : params_(params), init_status_(params.validate()) {
   scores_.reserve(1024);
   row_.reserve(1024);
+  // znccRow's scratch for the widest scan (1024 disparities, patch half 15 at most).
+  zncc_scratch_.sab.reserve(1024 + 1);
+  zncc_scratch_.col_sum.reserve(1024 + 1 + 30);
+  zncc_scratch_.col_sq.reserve(1024 + 1 + 30);
   // Per match of a frame (continuity check, recovery); grown once past this for more points.
   keep_.reserve(2048);
   rejected_.reserve(2048);
@@ -62,8 +68,8 @@ float parabolaPeak(float sm, float s0, float sp) {
 }  // namespace
 
 void StereoPointMatcher::setPeak(ImageView<const std::uint8_t> left,
-                                 ImageView<const std::uint8_t> right, int x, int y, int d,
-                                 float sm, float s0, float sp, StereoMatch& m) {
+                                 ImageView<const std::uint8_t> right, int x, int y, int d, float sm,
+                                 float s0, float sp, StereoMatch& m) {
   m.d_px = static_cast<float>(d) + parabolaPeak(sm, s0, sp);
   m.refined = false;
   double d_ref = 0.0;

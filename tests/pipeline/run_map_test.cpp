@@ -18,7 +18,8 @@ using svslam::test::slurp;
 
 namespace {
 
-const std::string kSource = "--source synthetic:width=320,height=240,frames=12";
+// The first 12 frames of the default flight's 100-frame loop, at 320x240.
+const std::string kSource = "--source synthetic:width=320,height=240,frames=12,loop_frames=100";
 
 class RunMap : public ::testing::Test {
  protected:
