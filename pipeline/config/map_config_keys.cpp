@@ -96,6 +96,10 @@ ConfigSection mapConfigSection() {
       number("gate_chi2", SVSLAM_FIELD(dem.gate_chi2), 1e-6, 1e6, "",
              "Mahalanobis gate (chi-square 1 dof) of a point's height against its cell; "
              "beyond, the point's variance is inflated onto the gate"),
+      number("max_height_above_camera_m", SVSLAM_FIELD(dem.max_height_above_camera_m), -1e6,
+             1e6, "m",
+             "points higher than this above the camera centre are not fused (a car: 0.5, "
+             "below street lamps and branches)"),
       number("min_sigma_m", SVSLAM_FIELD(dem.min_sigma_m), 0, 100, "m",
              "floor of every cell's height standard deviation (model error of dense stereo)"),
       number("max_tiles", SVSLAM_FIELD(dem.max_tiles), 1, 1000000, "",

@@ -77,6 +77,7 @@ void DemFuser::computePoints(const DemFrame& in, DemFuseStats& out) {
   const float inv_cell = static_cast<float>(1.0 / params_.cell_m);
   const float min_d = static_cast<float>(params_.min_disparity_px);
   const float max_range2 = static_cast<float>(params_.max_range_m * params_.max_range_m);
+  const auto max_dz = static_cast<float>(params_.max_height_above_camera_m);
   const DisparityResult& disp = *in.disparity;
   int n = 0;
   int i0 = std::numeric_limits<int>::max(), j0 = i0, i1 = std::numeric_limits<int>::min(), j1 = i1;
@@ -117,6 +118,10 @@ void DemFuser::computePoints(const DemFrame& in, DemFuseStats& out) {
       const float px = s * (col0.x() * xu + a.x()) + tf.x();
       const float py = s * (col0.y() * xu + a.y()) + tf.y();
       const float dz = s * (col0.z() * xu + a.z());  // r_z . X_cam
+      if (dz > max_dz) {
+        ++out.points_out_of_range;
+        continue;
+      }
       const float r = dz / d;
       const float var_indep = std::max(kMinVarIndep, r * r * sd * sd);
       const float var_pose =

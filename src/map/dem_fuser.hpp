@@ -52,7 +52,7 @@ struct DemFuseStats {
   int points_fused = 0;
   int points_gated = 0;         // fused with an inflated variance
   int points_not_finite = 0;    // NaN / inf disparity sigma, position or variance
-  int points_out_of_range = 0;  // disparity < min_disparity_px or range > max_range_m
+  int points_out_of_range = 0;  // d < min_disparity_px, range > max_range_m or too high
   int points_no_tile = 0;       // their tile would exceed max_tiles
   int cells_updated = 0;
 };

@@ -17,6 +17,9 @@ struct DemParams {
   std::array<double, 3> gravity_in_first_camera{0.0, 0.0, 1.0};
   int tile_cells = 64;            // tile side in cells (tiles are allocated on demand), [8, 1024]
   double max_range_m = 60.0;      // points farther from the camera are not fused, m, > 0
+  // Points higher than this above the camera centre (map z) are not fused: a ground vehicle
+  // maps the ground, not the street lamps and branches over it. m, finite; default: no limit.
+  double max_height_above_camera_m = 1e6;
   double min_disparity_px = 1.0;  // smaller disparities (far, imprecise) are not fused, px, > 0
   // Mahalanobis gate (chi-square, 1 dof) of a point's height against the cell's estimate; a
   // point beyond it has its variance inflated to sit on the gate instead of dragging the cell.

@@ -184,6 +184,20 @@ TEST(DemFuser, NanDisparitiesNeverReachTheGrid) {
   }
 }
 
+TEST(DemFuser, PointsHigherThanTheLimitAboveTheCameraAreNotFused) {
+  Scene s;
+  s.plane(20.0, 0.1f, 3);  // the ground 20 m below the camera
+  for (double limit : {-25.0, -15.0}) {
+    DemParams p = params();
+    p.max_height_above_camera_m = limit;
+    DemFuser fuser(p, calib(), lookingDown());
+    DemMap map(p);
+    DemFuseStats st;
+    ASSERT_TRUE(fuser.process(s.frame(), map, st).isOk());
+    EXPECT_EQ(st.points_fused, limit < -20.0 ? 0 : kW * kH) << limit;
+  }
+}
+
 TEST(DemFuser, SizeMismatchIsAnError) {
   DemFuser fuser(params(), calib(), lookingDown());
   DemMap map(params());
