@@ -1,5 +1,9 @@
 #include "pipeline/realtime/slam_stages.hpp"
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include "pipeline/service/scheduling.hpp"
 #include "pipeline/thread_pool_executor.hpp"
 
@@ -87,7 +91,13 @@ void SlamStages::onThreadStart(const std::string& stage) {
   if (stage == "stereo") sched = &p.stereo;
   if (stage == "estimator") sched = &p.estimator;
   if (stage == "publisher") sched = &p.publisher;
-  if (stage == "mapper") sched = &p.mapper;
+  if (stage == "mapper") {
+    sched = &p.mapper;
+    // The map is never worth a late pose: under normal scheduling the mapper thread yields the
+    // cores to the pose path (nice +10 for this thread only; Linux nice is per thread).
+    if (sched->fifo_priority == 0)
+      (void)setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 10);
+  }
   if (!sched || (sched->cpus.empty() && sched->fifo_priority == 0)) return;
   std::string warning;
   const Status s = service::applyToCurrentThread(*sched, warning);
