@@ -5,6 +5,8 @@
 # memory should stay flat (issue: within 5 %).
 #   scripts/map_memory.sh [SVSLAM_BINARY] [SOURCE]
 # Default source: the 512x384 synthetic blimp flight, 1000 frames, a loop every 100 frames.
+# Extra `svslam run` options: SVSLAM_RUN_ARGS (e.g. "--mode vo": no landmark map, so the
+# growth left is the elevation map's and the rest of the pipeline's).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${1:-./build/pipeline/svslam}
@@ -12,7 +14,8 @@ src=${2:-synthetic:width=512,height=384,frames=1000,loop_frames=100}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 printf 'pipeline:\n  progress_period_s: 0.5\n' > "$tmp/cfg.yaml"
-"$bin" run --source "$src" --config "$tmp/cfg.yaml" --out "$tmp/o" > "$tmp/out.json" 2> "$tmp/err" &
+"$bin" run --source "$src" --config "$tmp/cfg.yaml" --out "$tmp/o" ${SVSLAM_RUN_ARGS:-} \
+  > "$tmp/out.json" 2> "$tmp/err" &
 pid=$!
 rss300="" last_rss="" last_n=0
 while kill -0 "$pid" 2> /dev/null; do
@@ -27,11 +30,12 @@ while kill -0 "$pid" 2> /dev/null; do
   sleep 0.2
 done
 wait "$pid"
-tiles=$(python3 -c "import json; print(json.load(open('$tmp/o/stats.json'))['map']['tiles'])")
-python3 - "$rss300" "$n300" "$last_rss" "$last_n" "$tiles" <<'PY'
+python3 - "$rss300" "$n300" "$last_rss" "$last_n" "$tmp/o/stats.json" <<'PY'
 import json, sys
-r300, n300, rl, nl, tiles = (int(x) for x in sys.argv[1:])
+r300, n300, rl, nl = (int(x) for x in sys.argv[1:5])
+stats = json.load(open(sys.argv[5]))
 print(json.dumps({"poses_at_first": n300, "rss_first_kib": r300, "poses_at_last": nl,
                   "rss_last_kib": rl, "growth_pct": round(100.0 * (rl - r300) / r300, 2),
-                  "map_tiles": tiles}))
+                  "map_tiles": stats["map"]["tiles"], "map_cell_bytes": stats["map"]["cell_bytes"],
+                  "landmarks_in_map": stats.get("landmarks_in_map")}))
 PY
