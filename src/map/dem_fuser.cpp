@@ -1,5 +1,7 @@
 #include "map/dem_fuser.hpp"
 
+#include "slam/pose_jacobians.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -16,11 +18,6 @@ inline std::int32_t floorToInt(float v) {
   return i - (v < static_cast<float>(i) ? 1 : 0);
 }
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return m;
-}
 }  // namespace
 
 const char* toString(DemSkip s) {
@@ -58,7 +55,7 @@ void DemFuser::computePoints(const DemFrame& in, DemFuseStats& out) {
   // J_theta = q x u = M q with M = -[u]x, q = R_world_cam X_cam.
   const Eigen::Vector3d u = R_map_world_.row(2).transpose();
   const Eigen::Matrix3d R = in.T_world_cam.linear();
-  const Eigen::Matrix3d M = -skew(u);
+  const Eigen::Matrix3d M = -hatSO3(u);
   const Eigen::Matrix3d A = in.pose_cov.topLeftCorner<3, 3>();
   const Eigen::Matrix3d B = in.pose_cov.topRightCorner<3, 3>();
   const Eigen::Matrix3d C = in.pose_cov.bottomRightCorner<3, 3>();

@@ -97,9 +97,13 @@ bool DemMap::estimate(int i, int j, double& height_m, double& sigma_m) const {
   const DemCell* c = cell(i, j);
   if (c == nullptr || c->count == 0) return false;
   height_m = c->height_m;
-  const double si = decodeSigma(c->sigma_indep), sp = decodeSigma(c->sigma_pose);
-  sigma_m = std::sqrt(si * si + sp * sp + params_.min_sigma_m * params_.min_sigma_m);
+  sigma_m = totalSigma(*c);
   return true;
+}
+
+double DemMap::totalSigma(const DemCell& c) const {
+  const double si = decodeSigma(c.sigma_indep), sp = decodeSigma(c.sigma_pose);
+  return std::sqrt(si * si + sp * sp + params_.min_sigma_m * params_.min_sigma_m);
 }
 
 bool DemMap::fuse(int i, int j, const CellMeasurement& m, std::int64_t seq, std::int64_t t_ns) {
@@ -157,10 +161,8 @@ void DemMap::fillRaster(const DemTile& t, DemRaster& out) const {
       int col = 0, row = 0;
       if (!out.cellToPixel(t.ti * n + c, t.tj * n + r, col, row)) continue;
       const std::size_t k = out.index(col, row);
-      const double si = decodeSigma(cell.sigma_indep), sp = decodeSigma(cell.sigma_pose);
       out.height_m[k] = cell.height_m;
-      out.sigma_m[k] = static_cast<float>(
-          std::sqrt(si * si + sp * sp + params_.min_sigma_m * params_.min_sigma_m));
+      out.sigma_m[k] = static_cast<float>(totalSigma(cell));
       out.count[k] = cell.count;
       out.luminance[k] =
           static_cast<std::uint8_t>(std::clamp((cell.luminance_8_8 + 128) / 256, 0, 255));

@@ -105,6 +105,8 @@ class DemMap {
            static_cast<std::uint32_t>(tj);
   }
   void fillRaster(const DemTile& tile, DemRaster& out) const;
+  // Reported standard deviation of a cell with data, m (the header's formula, in double).
+  double totalSigma(const DemCell& c) const;
 
   DemParams params_;
   Status init_status_;
