@@ -1,10 +1,10 @@
 #include "map/dem_fuser.hpp"
 
-#include "slam/pose_jacobians.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
+
+#include "slam/pose_jacobians.hpp"
 
 namespace svslam::map {
 
