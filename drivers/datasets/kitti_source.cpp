@@ -1,5 +1,4 @@
 // kitti:DIR source (see stereo_source.hpp).
-#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -41,12 +40,10 @@ Result<std::vector<double>> parseNumbers(const std::string& line, const std::str
   std::string tok;
   while (s >> tok) {
     char* end = nullptr;
-    errno = 0;
-    const double x = std::strtod(tok.c_str(), &end);
+    const double x = std::strtod(tok.c_str(), &end);  // overflow gives +-inf
     if (end == tok.c_str() || *end != '\0')
       return Status::corruptData(what + ": '" + tok + "' is not a number");
-    if (!std::isfinite(x) || errno == ERANGE)
-      return Status::corruptData(what + ": value '" + tok + "' is not finite");
+    if (!std::isfinite(x)) return Status::corruptData(what + ": value '" + tok + "' is not finite");
     v.push_back(x);
   }
   return v;

@@ -181,6 +181,8 @@ TEST_F(KittiFolder, CalibrationErrorsSayWhatIsWrong) {
   EXPECT_NE(openError().find("'nan' is not finite"), std::string::npos) << openError();
   calib("P0: 700 0 300 0 0 700 180 0 0 0 1 0", "P1: 700 0 inf -350 0 700 180 0 0 0 1 0");
   EXPECT_NE(openError().find("'inf' is not finite"), std::string::npos) << openError();
+  calib("P0: 700 0 300 0 0 700 1e400 0 0 0 1 0", kCalibP1);
+  EXPECT_NE(openError().find("'1e400' is not finite"), std::string::npos) << openError();
   calib("P0: 0 0 300 0 0 700 180 0 0 0 1 0", "P1: 0 0 300 -350 0 700 180 0 0 0 1 0");
   EXPECT_NE(openError().find("fx (its 1st number) must be positive"), std::string::npos)
       << openError();
