@@ -148,9 +148,9 @@ int runPipeline(const std::vector<std::string>& args) {
       "SIGTERM/SIGINT/SIGHUP stop capture, drain the frames in flight, write every output\n"
       "and exit 0 (also during --preload or while a source waits for its first frame).\n"
       "An output folder used before loses the files of the earlier run that this run\n"
-      "writes (trajectories, stats.json, map files...); other files stay. Under systemd "
-      "(Type=notify): READY=1 after the first pose, WATCHDOG=1 while\n"
-      "frames complete. Prints a JSON summary.");
+      "writes (trajectories, stats.json, map files...); other files stay. Under\n"
+      "systemd (Type=notify): READY=1 after the first pose, WATCHDOG=1 while frames\n"
+      "complete. Prints a JSON summary.");
   p.addOption("source", "SRC",
               "kitti:DIR, euroc:DIR, synthetic[:key=value,...], v4l2:..., libcamera:... or "
               "lcm:CHANNEL (default: the config's 'source', else synthetic)");
