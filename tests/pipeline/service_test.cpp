@@ -3,7 +3,9 @@
 // health check while frames complete) and STOPPING=1; SIGTERM mid-run stops capture, drains,
 // writes every output whole and exits 0; so does a stop signal during --preload, while an lcm:
 // source waits for its first frame, at the very start, and SIGHUP.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <pthread.h>
 #include <signal.h>
 #include <sys/socket.h>
 #include <sys/un.h>
@@ -17,6 +19,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "cli_helpers.hpp"
 
@@ -52,22 +55,36 @@ class Service : public ::testing::Test {
     fs::remove_all(dir_);
   }
   // Starts svslam run with the notify environment; returns its pid. With block_stop_signals
-  // it starts with SIGTERM, SIGINT and SIGHUP blocked (pending until svslam unblocks them).
+  // it starts with SIGTERM, SIGINT and SIGHUP blocked (pending until svslam unblocks them),
+  // executed directly (no shell, which would reset the mask; `args` then has no quotes).
   pid_t start(const std::string& args, bool block_stop_signals = false) {
+    // Blocked before fork (the child inherits the mask): a signal sent right after start()
+    // returns cannot hit the child before its mask is set.
+    sigset_t set, old;
+    sigemptyset(&set);
+    for (int sig : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&set, sig);
+    if (block_stop_signals) ::pthread_sigmask(SIG_BLOCK, &set, &old);
     const pid_t pid = ::fork();
+    if (pid != 0 && block_stop_signals) ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
     if (pid == 0) {
-      if (block_stop_signals) {
-        sigset_t set;
-        sigemptyset(&set);
-        for (int sig : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&set, sig);
-        ::sigprocmask(SIG_BLOCK, &set, nullptr);
-      }
       ::setenv("NOTIFY_SOCKET", sock_path_.c_str(), 1);
       ::setenv("WATCHDOG_USEC", "400000", 1);  // ping every 200 ms while frames complete
       ::setenv("WATCHDOG_PID", std::to_string(::getpid()).c_str(), 1);
+      const std::string out = (dir_ / "stdout.txt").string(), err = (dir_ / "stderr.txt").string();
+      if (block_stop_signals) {
+        std::vector<std::string> words{SVSLAM_CLI, "run"};
+        std::istringstream ss(args + " --out " + (dir_ / "out").string());
+        for (std::string w; ss >> w;) words.push_back(w);
+        std::vector<char*> argv;
+        for (auto& w : words) argv.push_back(w.data());
+        argv.push_back(nullptr);
+        ::dup2(::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644), 1);
+        ::dup2(::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644), 2);
+        ::execv(SVSLAM_CLI, argv.data());
+        ::_exit(127);
+      }
       const std::string cmd = std::string("exec ") + SVSLAM_CLI + " run " + args + " --out " +
-                              (dir_ / "out").string() + " > " + (dir_ / "stdout.txt").string() +
-                              " 2> " + (dir_ / "stderr.txt").string();
+                              (dir_ / "out").string() + " > " + out + " 2> " + err;
       ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
       ::_exit(127);
     }
