@@ -8,9 +8,9 @@
 
 #include "drivers/files/image_io.hpp"
 #include "drivers/files/opencv_view.hpp"
-#include "drivers/source/stereo_source.hpp"
 #include "drivers/files/trajectory_io.hpp"
 #include "drivers/files/yaml_lists.hpp"
+#include "drivers/source/stereo_source.hpp"
 
 namespace fs = std::filesystem;
 
@@ -147,7 +147,7 @@ Result<std::unique_ptr<StereoSource>> openEurocSource(const std::string& dir) {
   calib.baseline_m = -P1.at<double>(0, 3) / P1.at<double>(0, 0);
   calib.width = c0->size.width;
   calib.height = c0->size.height;
-  if (Status s = calib.validate(); !s)
+  if (Status s = checkStereoCalibration(calib); !s)
     return Status(s.code(), "EuRoC rectification of " + dir + ": " + s.message());
   return std::unique_ptr<StereoSource>(std::make_unique<EurocSource>(
       std::move(c0).value(), std::move(c1).value(), calib, m0x, m0y, m1x, m1y));

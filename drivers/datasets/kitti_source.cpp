@@ -1,8 +1,9 @@
 // kitti:DIR source (see stereo_source.hpp).
-#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -14,24 +15,133 @@ namespace fs = std::filesystem;
 namespace svslam::drivers {
 namespace {
 
-std::vector<std::string> listImages(const fs::path& dir) {
-  std::vector<std::string> out;
+// The images of `dir` by name without extension (regular .png/.jpg/.pgm files; names starting
+// with '.' are hidden files, not images). Two images with the same name are an error.
+Result<std::map<std::string, std::string>> listImages(const fs::path& dir) {
+  std::map<std::string, std::string> out;
   for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
     const std::string ext = e.path().extension().string();
-    if (e.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".pgm"))
-      out.push_back(e.path().string());
+    if (name.empty() || name[0] == '.' || !e.is_regular_file()) continue;
+    if (ext != ".png" && ext != ".jpg" && ext != ".pgm") continue;
+    const std::string stem = e.path().stem().string();
+    if (auto it = out.find(stem); it != out.end())
+      return Status::corruptData("two images of frame '" + stem + "' in " + dir.string() + ": " +
+                                 fs::path(it->second).filename().string() + " and " + name);
+    out.emplace(stem, e.path().string());
   }
-  std::sort(out.begin(), out.end());
   return out;
+}
+
+// Whitespace-separated numbers of `line`; `what` names the line in errors.
+Result<std::vector<double>> parseNumbers(const std::string& line, const std::string& what) {
+  std::istringstream s(line);
+  std::vector<double> v;
+  std::string tok;
+  while (s >> tok) {
+    char* end = nullptr;
+    const double x = std::strtod(tok.c_str(), &end);  // overflow gives +-inf
+    if (end == tok.c_str() || *end != '\0')
+      return Status::corruptData(what + ": '" + tok + "' is not a number");
+    if (!std::isfinite(x)) return Status::corruptData(what + ": value '" + tok + "' is not finite");
+    v.push_back(x);
+  }
+  return v;
+}
+
+// calib.txt: P0 then P1, 12 numbers each, optionally labelled "P0:". Both cameras of a
+// rectified pair share fx, fy, cx, cy; P1 holds -fx * baseline in its 4th number.
+Result<StereoCalibration> readCalibration(const fs::path& calib_path) {
+  std::ifstream cf(calib_path);
+  if (!cf) return Status::notFound("cannot open " + calib_path.string());
+  const std::string file = calib_path.string();
+  std::vector<std::vector<double>> P;
+  std::string line;
+  int line_no = 0;
+  while (P.size() < 2 && std::getline(cf, line)) {
+    ++line_no;
+    std::istringstream s(line);
+    std::string first;
+    if (!(s >> first)) continue;
+    const std::string where = file + ":" + std::to_string(line_no);
+    auto v = parseNumbers(first.back() == ':' ? line.substr(line.find(':') + 1) : line, where);
+    if (!v) return v.status();
+    if (v->size() != 12)
+      return Status::corruptData(where + ": a projection line needs 12 numbers, got " +
+                                 std::to_string(v->size()));
+    P.push_back(std::move(*v));
+  }
+  if (P.size() < 2) return Status::corruptData(file + ": needs the P0 and P1 lines");
+  if (!(P[0][0] > 0.0))
+    return Status::corruptData(file + ": P0 fx (its 1st number) must be positive, got " +
+                               std::to_string(P[0][0]));
+  const char* names[] = {"fx", "cx", "fy", "cy"};
+  const int at[] = {0, 2, 5, 6};
+  for (int k = 0; k < 4; ++k) {
+    const double a = P[0][static_cast<std::size_t>(at[k])],
+                 b = P[1][static_cast<std::size_t>(at[k])];
+    if (std::abs(a - b) > 1e-6 * std::max(1.0, std::abs(a))) {
+      std::ostringstream ss;
+      ss << file << ": P1 " << names[k] << " = " << b << " differs from P0's " << a
+         << " (a rectified pair needs the same intrinsics in P0 and P1)";
+      return Status::corruptData(ss.str());
+    }
+  }
+  StereoCalibration c;
+  c.f_px = P[0][0];
+  c.cx_px = P[0][2];
+  c.cy_px = P[0][6];
+  c.baseline_m = -P[1][3] / P[1][0];
+  return c;
+}
+
+// times.txt: one stamp (seconds) per line, increasing, within the range of int64 nanoseconds.
+Result<std::vector<TimeNs>> readTimes(const fs::path& path) {
+  std::ifstream tf(path);
+  std::vector<TimeNs> t;
+  std::string line;
+  int line_no = 0;
+  double last = 0;
+  while (std::getline(tf, line)) {
+    ++line_no;
+    const std::string where = path.string() + ":" + std::to_string(line_no);
+    auto v = parseNumbers(line, where);
+    if (!v) return v.status();
+    if (v->empty()) continue;
+    if (v->size() != 1)
+      return Status::corruptData(where + ": expected one time stamp (seconds) per line");
+    const double ts = (*v)[0];
+    if (!(std::abs(ts) < 9.2e9))  // int64 nanoseconds hold +-9.22e9 s
+      return Status::corruptData(where + ": time stamp " + std::to_string(ts) +
+                                 " s is out of range (|t| < 9.2e9 s)");
+    if (!t.empty() && !(ts > last))
+      return Status::corruptData(where + ": time stamp " + std::to_string(ts) +
+                                 " s is not after the previous one (" + std::to_string(last) +
+                                 " s)");
+    t.push_back(secondsToNs(ts));
+    last = ts;
+  }
+  return t;
 }
 
 class KittiSource final : public StereoSource {
  public:
   KittiSource(StereoCalibration c, std::vector<std::string> l, std::vector<std::string> r,
-              std::vector<TimeNs> t)
-      : calib_(c), left_(std::move(l)), right_(std::move(r)), t_ns_(std::move(t)) {}
+              std::vector<TimeNs> t, std::vector<std::string> skipped)
+      : calib_(c),
+        left_(std::move(l)),
+        right_(std::move(r)),
+        t_ns_(std::move(t)),
+        skipped_(std::move(skipped)) {}
   const StereoCalibration& calibration() const override { return calib_; }
   int size() const override { return static_cast<int>(left_.size()); }
+  int skippedFrames() const override { return static_cast<int>(skipped_.size()); }
+  std::string skippedFramesDetail() const override {
+    std::string s;
+    for (std::size_t i = 0; i < skipped_.size() && i < 10; ++i) s += (i ? ", " : "") + skipped_[i];
+    if (skipped_.size() > 10) s += ", ...";
+    return s;
+  }
   Result<bool> next(StereoFrame& out) override {
     if (pos_ >= left_.size()) return false;
     auto l = loadGrey(left_[pos_]);
@@ -54,6 +164,7 @@ class KittiSource final : public StereoSource {
   StereoCalibration calib_;
   std::vector<std::string> left_, right_;
   std::vector<TimeNs> t_ns_;
+  std::vector<std::string> skipped_;  // e.g. "000003 (no right image)"
   std::size_t pos_ = 0;
 };
 
@@ -70,56 +181,54 @@ Result<std::unique_ptr<StereoSource>> openKittiSource(const std::string& dir) {
   if (!fs::is_directory(ldir) || !fs::is_directory(rdir))
     return Status::notFound("KITTI folder " + dir +
                             " has neither image_0/ + image_1/ nor image_l/ + image_r/");
-  auto left = listImages(ldir), right = listImages(rdir);
-  if (left.empty()) return Status::notFound("no image in " + ldir.string());
-  if (left.size() != right.size())
-    return Status::corruptData("KITTI folder " + dir + ": " + std::to_string(left.size()) +
-                               " left but " + std::to_string(right.size()) + " right images");
-  // calib.txt: P0 then P1, 12 numbers each, optionally labelled "P0:".
-  const fs::path calib_path = d / "calib.txt";
-  std::ifstream cf(calib_path);
-  if (!cf) return Status::notFound("cannot open " + calib_path.string());
-  std::vector<std::vector<double>> P;
-  std::string line;
-  while (std::getline(cf, line) && P.size() < 2) {
-    std::istringstream s(line);
-    std::string first;
-    if (!(s >> first)) continue;
-    std::vector<double> v;
-    if (first.back() != ':') s.seekg(0);
-    double x;
-    while (s >> x) v.push_back(x);
-    if (v.size() != 12)
-      return Status::corruptData(calib_path.string() + ": a projection line needs 12 numbers");
-    P.push_back(v);
+  auto lmap = listImages(ldir);
+  if (!lmap) return lmap.status();
+  auto rmap = listImages(rdir);
+  if (!rmap) return rmap.status();
+  if (lmap->empty()) return Status::notFound("no image in " + ldir.string());
+  // Frames by name, in name order: a pair is the left and right images of the same name.
+  std::map<std::string, int> names;  // name -> 1 left only, 2 right only, 3 both
+  for (const auto& [name, path] : *lmap) names[name] |= 1;
+  for (const auto& [name, path] : *rmap) names[name] |= 2;
+  std::vector<std::string> left, right, skipped;
+  std::vector<bool> kept;
+  for (const auto& [name, sides] : names) {
+    kept.push_back(sides == 3);
+    if (sides == 3) {
+      left.push_back(lmap->at(name));
+      right.push_back(rmap->at(name));
+    } else {
+      skipped.push_back(name + (sides == 1 ? " (no right image)" : " (no left image)"));
+    }
   }
-  if (P.size() < 2) return Status::corruptData(calib_path.string() + ": needs the P0 and P1 lines");
+  if (left.empty())
+    return Status::notFound("KITTI folder " + dir + ": no frame has both a left and a right image");
+
+  auto calib = readCalibration(d / "calib.txt");
+  if (!calib) return calib.status();
   auto first = loadGrey(left[0]);
   if (!first) return first.status();
-  StereoCalibration c;
-  c.f_px = P[0][0];
-  c.cx_px = P[0][2];
-  c.cy_px = P[0][6];
-  c.baseline_m = P[1][0] != 0 ? -P[1][3] / P[1][0] : NAN;
+  StereoCalibration c = *calib;
   c.width = first->width();
   c.height = first->height();
-  if (Status s = c.validate(); !s)
-    return Status(s.code(), calib_path.string() + ": " + s.message());
-  // times.txt (seconds) when present, else 10 Hz.
+  if (Status s = checkStereoCalibration(c); !s)
+    return Status(s.code(), (d / "calib.txt").string() + ": " + s.message());
+  // times.txt (seconds; one per frame name found in either folder) when present, else 10 Hz.
   std::vector<TimeNs> t;
-  std::ifstream tf(d / "times.txt");
-  if (tf) {
-    double ts;
-    while (tf >> ts) t.push_back(secondsToNs(ts));
-    if (t.size() != left.size())
-      return Status::corruptData((d / "times.txt").string() + ": " + std::to_string(t.size()) +
-                                 " stamps for " + std::to_string(left.size()) + " frames");
+  if (fs::exists(d / "times.txt")) {
+    auto all = readTimes(d / "times.txt");
+    if (!all) return all.status();
+    if (all->size() != names.size())
+      return Status::corruptData((d / "times.txt").string() + ": " + std::to_string(all->size()) +
+                                 " stamps for " + std::to_string(names.size()) + " frames");
+    for (std::size_t i = 0; i < kept.size(); ++i)
+      if (kept[i]) t.push_back((*all)[i]);
   } else {
-    for (std::size_t i = 0; i < left.size(); ++i)
-      t.push_back(static_cast<TimeNs>(i) * 100 * kNsPerMs);
+    for (std::size_t i = 0; i < kept.size(); ++i)
+      if (kept[i]) t.push_back(static_cast<TimeNs>(i) * 100 * kNsPerMs);
   }
-  return std::unique_ptr<StereoSource>(
-      std::make_unique<KittiSource>(c, std::move(left), std::move(right), std::move(t)));
+  return std::unique_ptr<StereoSource>(std::make_unique<KittiSource>(
+      c, std::move(left), std::move(right), std::move(t), std::move(skipped)));
 }
 
 }  // namespace svslam::drivers

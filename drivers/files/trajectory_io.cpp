@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -57,14 +58,31 @@ Result<TrajectoryFile> readTrajectory(const std::string& path) {
     if (expected == 12) {
       Eigen::Matrix3d R;
       R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
-      // Files store 7 significant digits: project onto a rotation (nearest unit quaternion).
+      // Files store 7 significant digits: a rotation within kRotationTolerance is projected
+      // onto the nearest one (unit quaternion); anything else is not a pose.
+      const double off = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+      if (off > kRotationTolerance || R.determinant() < 0.0) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf,
+                      ": the 3x3 part is not a rotation (max |R^T R - I| = %.3g, det = %.3g; "
+                      "allowed %g)",
+                      off, R.determinant(), kRotationTolerance);
+        return Status::corruptData(where(path, line_no) + buf);
+      }
       T.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
       T.translation() = Eigen::Vector3d(v[3], v[7], v[11]);
     } else {
       Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // w, x, y, z
-      if (q.norm() < 1e-6) return Status::corruptData(where(path, line_no) + ": zero quaternion");
+      if (std::abs(q.norm() - 1.0) > kRotationTolerance) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, ": the quaternion is not a unit one (norm %.6g)", q.norm());
+        return Status::corruptData(where(path, line_no) + buf);
+      }
       T.linear() = q.normalized().toRotationMatrix();
       T.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+      if (!(std::abs(v[0]) < (v[0] > 1e12 ? 9.2e18 : 9.2e9)))  // int64 ns: +-9.22e18
+        return Status::corruptData(where(path, line_no) + ": time stamp " + std::to_string(v[0]) +
+                                   " is out of range (|t| < 9.2e9 s, or < 9.2e18 ns)");
       out.t_ns.push_back(v[0] > 1e12 ? static_cast<TimeNs>(std::llround(v[0])) : secondsToNs(v[0]));
     }
     out.poses.push_back(T);

@@ -20,8 +20,13 @@ struct TrajectoryFile {
   std::vector<Eigen::Isometry3d> poses;  // T_world_frame
 };
 
+// Largest max |R^T R - I| of a KITTI rotation, and | |q| - 1 | of a TUM quaternion, accepted
+// (and projected onto the nearest rotation); beyond, the line is an error.
+inline constexpr double kRotationTolerance = 1e-3;
+
 // Reads a KITTI or TUM file, recognised by the number of values on the first data line (12 or
-// 8). '#' starts a comment. Every line must have the same format and finite values.
+// 8). '#' starts a comment. Every line must have the same format and finite values, a rotation
+// (kRotationTolerance) and, for TUM, a time stamp within the range of int64 nanoseconds.
 Result<TrajectoryFile> readTrajectory(const std::string& path);
 
 // T_BS (sensor to body) from an EuRoC sensor.yaml: the 16 numbers after "data:" under "T_BS:".

@@ -117,32 +117,39 @@ void LcmStereoSource::receiveLoop() {
   }
 }
 
-Status LcmStereoSource::start(LcmLink& link) {
+Status LcmStereoSource::start(LcmLink& link, const StopQuery& stop) {
   link_ = &link;
-  auto id = link.subscribeRaw(params_.channel, [this](const std::uint8_t* d, std::size_t n) {
-    onImage(d, n);
-  });
+  auto id = link.subscribeRaw(params_.channel,
+                              [this](const std::uint8_t* d, std::size_t n) { onImage(d, n); });
   if (!id) return id.status();
   sub_id_ = *id;
   rx_ = std::thread([this] { receiveLoop(); });
   std::unique_lock<std::mutex> lock(mu_);
-  cv_.wait_for(lock, toDuration(params_.timeout_s), [this] { return have_calib_ || ended_; });
+  const auto deadline = std::chrono::steady_clock::now() + toDuration(params_.timeout_s);
+  for (;;) {
+    const auto slice = std::min<std::chrono::steady_clock::time_point>(
+        deadline, std::chrono::steady_clock::now() + std::chrono::milliseconds(50));
+    if (cv_.wait_until(lock, slice, [this] { return have_calib_ || ended_; })) break;
+    if (std::chrono::steady_clock::now() >= deadline) break;
+    if (stop && stop())
+      return Status::failedPrecondition("lcm:" + params_.channel +
+                                        ": stop requested while waiting for the first frame");
+  }
   if (have_calib_) return Status::ok();
   std::string why;
   if (ended_) why = " (" + end_status_.message() + ")";
   if (malformed_.load() > 0) why += " (" + std::to_string(malformed_.load()) + " malformed)";
   char secs[32];
   std::snprintf(secs, sizeof secs, "%g", params_.timeout_s);
-  return Status::notFound("lcm:" + params_.channel + ": no stereo_image_t received within " +
-                          secs + " s" + why);
+  return Status::notFound("lcm:" + params_.channel + ": no stereo_image_t received within " + secs +
+                          " s" + why);
 }
 
 Result<bool> LcmStereoSource::next(StereoFrame& out) {
   svslam_lcm::stereo_image_t m;
   {
     std::unique_lock<std::mutex> lock(mu_);
-    cv_.wait_for(lock, toDuration(params_.timeout_s),
-                 [this] { return !queue_.empty() || ended_; });
+    cv_.wait_for(lock, toDuration(params_.timeout_s), [this] { return !queue_.empty() || ended_; });
     if (queue_.empty()) return false;  // timeout or end of the stream
     m = std::move(queue_.front());
     queue_.pop_front();
@@ -152,15 +159,16 @@ Result<bool> LcmStereoSource::next(StereoFrame& out) {
   return true;
 }
 
-Result<std::unique_ptr<StereoSource>> openLcmSource(const LcmSourceParams& params,
-                                                    LcmLink& link) {
+Result<std::unique_ptr<StereoSource>> openLcmSource(const LcmSourceParams& params, LcmLink& link,
+                                                    const StopQuery& stop) {
   if (Status s = params.validate(); !s) return s;
   std::unique_ptr<LcmStereoSource> src(new LcmStereoSource(params));
-  if (Status s = src->start(link); !s) return s;
+  if (Status s = src->start(link, stop); !s) return s;
   return std::unique_ptr<StereoSource>(std::move(src));
 }
 
-Result<std::unique_ptr<StereoSource>> openLcmSource(const std::string& spec_after_prefix) {
+Result<std::unique_ptr<StereoSource>> openLcmSource(const std::string& spec_after_prefix,
+                                                    const StopQuery& stop) {
   auto params = parseLcmSourceSpec(spec_after_prefix);
   if (!params) return params.status();
   LcmParams lp;
@@ -169,7 +177,7 @@ Result<std::unique_ptr<StereoSource>> openLcmSource(const std::string& spec_afte
   if (!link) return link.status();
   std::unique_ptr<LcmStereoSource> src(new LcmStereoSource(*params));
   src->owned_link_ = std::move(link.value());
-  if (Status s = src->start(*src->owned_link_); !s) return s;
+  if (Status s = src->start(*src->owned_link_, stop); !s) return s;
   return std::unique_ptr<StereoSource>(std::move(src));
 }
 

@@ -28,10 +28,10 @@
 namespace svslam::drivers {
 
 struct LcmSourceParams {
-  std::string channel;                             // validateChannelName
-  std::string url = LcmParams{}.url;               // LCM URL
-  double timeout_s = 10.0;                         // (0, 86400], seconds
-  int queue_capacity = 4;                          // [1, 256] frames
+  std::string channel;                // validateChannelName
+  std::string url = LcmParams{}.url;  // LCM URL
+  double timeout_s = 10.0;            // (0, 86400], seconds
+  int queue_capacity = 4;             // [1, 256] frames
 
   Status validate() const;
 };
@@ -54,10 +54,12 @@ class LcmStereoSource : public StereoSource {
   std::int64_t droppedCount() const { return dropped_.load(); }
 
  private:
-  friend Result<std::unique_ptr<StereoSource>> openLcmSource(const LcmSourceParams&, LcmLink&);
-  friend Result<std::unique_ptr<StereoSource>> openLcmSource(const std::string&);
+  friend Result<std::unique_ptr<StereoSource>> openLcmSource(const LcmSourceParams&, LcmLink&,
+                                                             const StopQuery&);
+  friend Result<std::unique_ptr<StereoSource>> openLcmSource(const std::string&, const StopQuery&);
   explicit LcmStereoSource(LcmSourceParams params) : params_(std::move(params)) {}
-  Status start(LcmLink& link);  // subscribes, starts the receiver, waits for the first frame
+  // Subscribes, starts the receiver, waits for the first frame (polling `stop` every 50 ms).
+  Status start(LcmLink& link, const StopQuery& stop);
   void onImage(const std::uint8_t* data, std::size_t size);
   void receiveLoop();
 
@@ -80,11 +82,14 @@ class LcmStereoSource : public StereoSource {
   std::atomic<std::int64_t> malformed_{0}, mismatched_{0}, dropped_{0};
 };
 
-// "CHANNEL[?timeout_s=S&queue=N&url=URL]": opens its own LcmLink on the URL.
-Result<std::unique_ptr<StereoSource>> openLcmSource(const std::string& spec_after_prefix);
+// "CHANNEL[?timeout_s=S&queue=N&url=URL]": opens its own LcmLink on the URL. While it waits for
+// the first frame, `stop` (when set) is polled every 50 ms; true ends the wait with an error
+// saying so.
+Result<std::unique_ptr<StereoSource>> openLcmSource(const std::string& spec_after_prefix,
+                                                    const StopQuery& stop = {});
 // Receives on an existing link (e.g. memq:// shared with a publisher in this process); the
 // link must outlive the source. The URL of params is ignored.
-Result<std::unique_ptr<StereoSource>> openLcmSource(const LcmSourceParams& params,
-                                                    LcmLink& link);
+Result<std::unique_ptr<StereoSource>> openLcmSource(const LcmSourceParams& params, LcmLink& link,
+                                                    const StopQuery& stop = {});
 
 }  // namespace svslam::drivers

@@ -24,7 +24,7 @@ Result<bool> PreloadedSource::next(StereoFrame& out) {
 }
 
 Result<std::unique_ptr<PreloadedSource>> preload(std::unique_ptr<StereoSource> inner,
-                                                 int max_frames) {
+                                                 int max_frames, const StopQuery& stop) {
   if (!inner) return Status::invalidArgument("preload: no source");
   if (inner->size() < 0)
     return Status::invalidArgument("preload: a live source cannot be read in advance");
@@ -32,6 +32,7 @@ Result<std::unique_ptr<PreloadedSource>> preload(std::unique_ptr<StereoSource> i
   p->inner_ = std::move(inner);
   for (;;) {
     if (max_frames > 0 && static_cast<int>(p->frames_.size()) >= max_frames) break;
+    if (stop && stop()) break;
     StereoFrame f;
     auto more = p->inner_->next(f);
     if (!more) return more.status();
@@ -42,8 +43,8 @@ Result<std::unique_ptr<PreloadedSource>> preload(std::unique_ptr<StereoSource> i
 }
 
 Result<std::unique_ptr<StereoSource>> preloadSource(std::unique_ptr<StereoSource> inner,
-                                                    int max_frames) {
-  auto p = preload(std::move(inner), max_frames);
+                                                    int max_frames, const StopQuery& stop) {
+  auto p = preload(std::move(inner), max_frames, stop);
   if (!p) return p.status();
   return std::unique_ptr<StereoSource>(std::move(*p));
 }

@@ -14,6 +14,8 @@ class PreloadedSource final : public StereoSource {
   const StereoCalibration& calibration() const override { return inner_->calibration(); }
   int size() const override { return static_cast<int>(frames_.size()); }
   Result<bool> next(StereoFrame& out) override;
+  int skippedFrames() const override { return inner_->skippedFrames(); }
+  std::string skippedFramesDetail() const override { return inner_->skippedFramesDetail(); }
   bool groundTruth(int index, Eigen::Isometry3d& T_first_cam) const override {
     return inner_->groundTruth(index, T_first_cam);
   }
@@ -28,18 +30,20 @@ class PreloadedSource final : public StereoSource {
   void rewind() { next_ = 0; }
 
  private:
-  friend Result<std::unique_ptr<PreloadedSource>> preload(std::unique_ptr<StereoSource>, int);
+  friend Result<std::unique_ptr<PreloadedSource>> preload(std::unique_ptr<StereoSource>, int,
+                                                          const StopQuery&);
   std::unique_ptr<StereoSource> inner_;
   std::vector<StereoFrame> frames_;
   std::size_t next_ = 0;
 };
 
 // Reads up to `max_frames` pairs (0 = all) of `inner` (which must be finite: size() >= 0).
-// Error when a frame cannot be read or the source is live.
+// Error when a frame cannot be read or the source is live. `stop` (when set) is polled before
+// each frame: true ends the reading early, keeping the frames read so far.
 Result<std::unique_ptr<PreloadedSource>> preload(std::unique_ptr<StereoSource> inner,
-                                                 int max_frames);
+                                                 int max_frames, const StopQuery& stop = {});
 // The same, as a plain StereoSource.
 Result<std::unique_ptr<StereoSource>> preloadSource(std::unique_ptr<StereoSource> inner,
-                                                    int max_frames);
+                                                    int max_frames, const StopQuery& stop = {});
 
 }  // namespace svslam::drivers

@@ -2,21 +2,25 @@
 // Stereo sequence sources: each yields timestamped, rectified grey stereo pairs and the
 // rectified calibration (left camera, baseline along +x).
 //   kitti:DIR  KITTI odometry layout: image_0/ + image_1/ (or image_l/ + image_r/), calib.txt
-//              with P0 and P1 (labelled "P0:" or not), optional times.txt (s); else 10 Hz.
+//              with P0 and P1 (labelled "P0:" or not; same fx, fy, cx, cy), optional times.txt
+//              (s, increasing, one per frame name); else 10 Hz. Left and right images are
+//              paired by name; a frame with one side missing is skipped and counted
+//              (skippedFrames); names starting with '.' are not images.
 //   euroc:DIR  EuRoC ASL layout: mav0/cam0, mav0/cam1 (data.csv, sensor.yaml with pinhole
 //              intrinsics, radial-tangential distortion, T_BS); rectified with OpenCV
 //              (stereoRectify, precomputed remap maps).
 //   synthetic[:key=value,...]  rendered stereo flight over a textured heightfield with exact
 //              ground truth (synthetic_flight.hpp); the built-in default source.
 #include <Eigen/Geometry>
+#include <functional>
 #include <memory>
 #include <string>
 
 #include "core/camera.hpp"
 #include "core/image.hpp"
 #include "core/status.hpp"
-#include "map/dem_raster.hpp"
 #include "core/time.hpp"
+#include "map/dem_raster.hpp"
 
 namespace svslam::drivers {
 
@@ -32,6 +36,10 @@ class StereoSource {
   virtual const StereoCalibration& calibration() const = 0;
   // Number of frames, or -1 when unknown (live cameras).
   virtual int size() const = 0;
+  // Frames of a recording left out when it was opened (kitti: the left or the right image is
+  // missing), and their names (the first ten); 0 and "" when none.
+  virtual int skippedFrames() const { return 0; }
+  virtual std::string skippedFramesDetail() const { return ""; }
   // Reads the next pair into `out` (buffers reused); returns false at the end of the sequence.
   // A missing or corrupt image is an error naming the file.
   virtual Result<bool> next(StereoFrame& out) = 0;
@@ -61,13 +69,22 @@ class StereoSource {
   }
 };
 
+// StereoCalibration::validate, and bounds that keep projections finite: f_px <= 1e6 px,
+// |cx_px|, |cy_px| <= 1e6 px, baseline_m <= 1e4 m, sides <= 65536 px.
+Status checkStereoCalibration(const StereoCalibration& c);
+
 Result<std::unique_ptr<StereoSource>> openKittiSource(const std::string& dir);
 Result<std::unique_ptr<StereoSource>> openEurocSource(const std::string& dir);
 
 // "synthetic[:key=value,...]" (keys in synthetic_flight.hpp).
 Result<std::unique_ptr<StereoSource>> openSyntheticSource(const std::string& options);
 
-// "kitti:DIR", "euroc:DIR" or "synthetic[:key=value,...]".
-Result<std::unique_ptr<StereoSource>> openStereoSource(const std::string& spec);
+// Polled while opening a source waits (lcm: for its first frame): true = give up. Empty: wait.
+using StopQuery = std::function<bool()>;
+
+// "kitti:DIR", "euroc:DIR", "synthetic[:key=value,...]", "v4l2:...", "libcamera:..." or
+// "lcm:CHANNEL...". An open abandoned because `stop` returned true is an error saying so.
+Result<std::unique_ptr<StereoSource>> openStereoSource(const std::string& spec,
+                                                       const StopQuery& stop = {});
 
 }  // namespace svslam::drivers

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "drivers/source/stereo_source.hpp"
-#include "drivers/synthetic/synthetic_flight.hpp"
 #include "drivers/synthetic/synthetic_dem.hpp"
+#include "drivers/synthetic/synthetic_flight.hpp"
 
 namespace svslam::drivers {
 namespace {
@@ -92,13 +92,19 @@ Result<SyntheticFlightParams> parseSyntheticOptions(const std::string& options) 
   const auto kv = splitOptions(options, bad);
   if (!bad.empty())
     return Status::invalidArgument("synthetic source: option '" + bad + "' is not key=value");
+  for (std::size_t i = 0; i < kv.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (kv[i].first == kv[j].first)
+        return Status::invalidArgument("synthetic source: key '" + kv[i].first +
+                                       "' is given twice");
   FlightVariant variant = FlightVariant::kBlimp;
   for (const auto& [k, v] : kv)
     if (k == "variant" && !parseFlightVariant(v, variant))
       return Status::invalidArgument("synthetic source: variant must be blimp or rover, not '" + v +
                                      "'");
   SyntheticFlightParams p = SyntheticFlightParams::forVariant(variant);
-  const std::map<std::string, int*> ints = {{"frames", &p.frames}, {"loop_frames", &p.loop_frames},
+  const std::map<std::string, int*> ints = {{"frames", &p.frames},
+                                            {"loop_frames", &p.loop_frames},
                                             {"width", &p.width},
                                             {"height", &p.height},
                                             {"supersample", &p.supersample}};

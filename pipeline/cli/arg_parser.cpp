@@ -129,8 +129,8 @@ Result<double> ArgParser::getDouble(const std::string& name) const {
 Status ArgParser::getSize(const std::string& name, int& w, int& h, bool require_odd) const {
   const std::string v = get(name);
   const auto x = v.find('x');
-  auto parse = [require_odd](const std::string& t, int& out) {
-    if (t.empty() || t.size() > (require_odd ? 2u : 4u)) return false;
+  auto parse = [](const std::string& t, int& out) {
+    if (t.empty() || t.size() > 9) return false;  // 9 digits fit an int
     for (char c : t)
       if (c < '0' || c > '9') return false;
     out = std::stoi(t);
@@ -138,6 +138,10 @@ Status ArgParser::getSize(const std::string& name, int& w, int& h, bool require_
   };
   if (x == std::string::npos || !parse(v.substr(0, x), w) || !parse(v.substr(x + 1), h))
     return Status::invalidArgument("--" + name + ": '" + v + "' is not of the form WxH (e.g. 9x7)");
+  const int max_side = require_odd ? 99 : 8192;
+  if (w > max_side || h > max_side)
+    return Status::invalidArgument("--" + name + ": " + v + " is too large (each side at most " +
+                                   std::to_string(max_side) + ")");
   if (!require_odd) {
     if (w < 1 || h < 1)
       return Status::invalidArgument("--" + name + ": sides must be >= 1, got " + v);

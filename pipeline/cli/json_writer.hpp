@@ -1,6 +1,7 @@
 #pragma once
 // JsonObject: one flat JSON object with keys in insertion order, for the CLI's stdout.
-// Non-finite numbers are written as null (JSON has no NaN or infinity).
+// Non-finite numbers are written as null (JSON has no NaN or infinity); strings are escaped
+// with jsonEscape.
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -25,6 +26,8 @@ class JsonObject {
   std::vector<std::pair<std::string, std::string>> fields_;
 };
 
+// `s` as a JSON string literal (quoted, escaped). Bytes that are not valid UTF-8 (a file name
+// in another encoding) each become U+FFFD, so the output is always valid JSON.
 std::string jsonEscape(const std::string& s);
 
 }  // namespace svslam::cli

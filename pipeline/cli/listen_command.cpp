@@ -32,9 +32,12 @@ std::string jsonArray(const double* v, int n, const char* fmt) {
 
 const char* statusName(drivers::TrackingStatus s) {
   switch (s) {
-    case drivers::TrackingStatus::kTracking: return "tracking";
-    case drivers::TrackingStatus::kLost: return "lost";
-    case drivers::TrackingStatus::kInitializing: return "initializing";
+    case drivers::TrackingStatus::kTracking:
+      return "tracking";
+    case drivers::TrackingStatus::kLost:
+      return "lost";
+    case drivers::TrackingStatus::kInitializing:
+      return "initializing";
   }
   return "unknown";
 }
@@ -122,7 +125,8 @@ int runListen(const std::vector<std::string>& args) {
               "publish_utime (us), position (m), orientation (w, x, y, z), the covariance\n"
               "diagonal [rot rad^2, trans m^2] and the tracking status; map tiles with t_ns,\n"
               "tile_i, tile_j, the cells with data and their mean height (m). Exits 0 after\n"
-              "--count poses, 1 when no pose arrives within --timeout-s.");
+              "--count poses (--count 0: at the end of a replayed file:// log), 1 when no\n"
+              "pose arrives within --timeout-s or a replayed log ends before --count poses.");
   p.addOption("url", "URL", "LCM URL", defaults.url);
   p.addOption("channel", "CHANNEL", "pose channel", defaults.pose_channel);
   p.addOption("stats-channel", "CHANNEL", "statistics channel", defaults.stats_channel);
@@ -151,8 +155,8 @@ int runListen(const std::vector<std::string>& args) {
   if (!link) return fail(link.status());
 
   using Clock = std::chrono::steady_clock;
-  const auto gap = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(*timeout_s));
+  const auto gap =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(*timeout_s));
   auto deadline = Clock::now() + gap;
   std::int64_t received = 0, malformed = 0;
   const std::int64_t wanted = *count;
@@ -196,27 +200,29 @@ int runListen(const std::vector<std::string>& args) {
       return fail(id.status());
   }
   if (!p.flag("no-stats")) {
-    if (auto id = (*link)->subscribeRaw(lp.stats_channel, on_stats); !id)
-      return fail(id.status());
+    if (auto id = (*link)->subscribeRaw(lp.stats_channel, on_stats); !id) return fail(id.status());
   }
-  std::vector<drivers::Command> ignored;
+  // One message at a time, so that the loop ends right after the N-th pose (a replayed log may
+  // end just after it).
+  const bool replay = lp.url.rfind("file://", 0) == 0;
   while (wanted == 0 || received < wanted) {
     const auto left = deadline - Clock::now();
     if (left <= Clock::duration::zero()) {
       char secs[32];
       std::snprintf(secs, sizeof secs, "%g", *timeout_s);
       return fail(Status::notFound("no pose on '" + lp.pose_channel + "' via '" + lp.url +
-                                   "' within " + secs + " s (received " +
-                                   std::to_string(received) + (wanted ? " of " : "") +
-                                   (wanted ? std::to_string(wanted) : "") + ", " +
-                                   std::to_string(malformed) + " malformed)"));
+                                   "' within " + secs + " s (received " + std::to_string(received) +
+                                   (wanted ? " of " : "") + (wanted ? std::to_string(wanted) : "") +
+                                   ", " + std::to_string(malformed) + " malformed)"));
     }
     const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(left).count();
-    if (Status s = (*link)->pollCommands(static_cast<int>(std::clamp<long long>(ms, 0, 100)),
-                                         ignored);
-        !s)
-      return fail(s);
-    ignored.clear();
+    auto handled = (*link)->handle(static_cast<int>(std::clamp<long long>(ms, 0, 100)));
+    if (!handled && replay && wanted == 0) return 0;  // the whole log was printed
+    if (!handled && replay)
+      return fail(Status::notFound("the replayed log '" + lp.url + "' ended after " +
+                                   std::to_string(received) + " of the " + std::to_string(wanted) +
+                                   " poses wanted (" + std::to_string(malformed) + " malformed)"));
+    if (!handled) return fail(handled.status());
   }
   return 0;
 }

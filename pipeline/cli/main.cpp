@@ -1,5 +1,7 @@
 // svslam: the one executable, with subcommands.
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <string>
 #include <vector>
@@ -27,6 +29,25 @@ constexpr const char* kUsage =
     "\n"
     "Run 'svslam <command> --help' for the options of a command.\n";
 
+// Runs the command `cmd`; -1 when there is no such command.
+int dispatch(const std::string& cmd, const std::vector<std::string>& args) {
+  if (cmd == "--help" || cmd == "-h" || cmd == "help") {
+    std::fputs(kUsage, stdout);
+    return 0;
+  }
+  if (cmd == "disparity") return svslam::cli::runDisparity(args);
+  if (cmd == "eval-disparity") return svslam::cli::runEvalDisparity(args);
+  if (cmd == "fit-sigma") return svslam::cli::runFitSigma(args);
+  if (cmd == "run") return svslam::cli::runPipeline(args);
+  if (cmd == "config") return svslam::cli::runConfig(args);
+  if (cmd == "eval-trajectory") return svslam::cli::runEvalTrajectory(args);
+  if (cmd == "eval-dem") return svslam::cli::runEvalDem(args);
+#ifdef SVSLAM_HAVE_LISTEN
+  if (cmd == "listen") return svslam::cli::runListen(args);
+#endif
+  return -1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -36,21 +57,9 @@ int main(int argc, char** argv) {
   }
   const std::string cmd = argv[1];
   const std::vector<std::string> args(argv + 2, argv + argc);
+  int code = -1;
   try {
-    if (cmd == "--help" || cmd == "-h" || cmd == "help") {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
-    if (cmd == "disparity") return svslam::cli::runDisparity(args);
-    if (cmd == "eval-disparity") return svslam::cli::runEvalDisparity(args);
-    if (cmd == "fit-sigma") return svslam::cli::runFitSigma(args);
-    if (cmd == "run") return svslam::cli::runPipeline(args);
-    if (cmd == "config") return svslam::cli::runConfig(args);
-    if (cmd == "eval-trajectory") return svslam::cli::runEvalTrajectory(args);
-    if (cmd == "eval-dem") return svslam::cli::runEvalDem(args);
-#ifdef SVSLAM_HAVE_LISTEN
-    if (cmd == "listen") return svslam::cli::runListen(args);
-#endif
+    code = dispatch(cmd, args);
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "svslam %s: out of memory\n", cmd.c_str());
     return 1;
@@ -58,6 +67,18 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "svslam %s: internal error: %s\n", cmd.c_str(), e.what());
     return 1;
   }
-  std::fprintf(stderr, "svslam: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
-  return 2;
+  if (code < 0) {
+    std::fprintf(stderr, "svslam: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
+    return 2;
+  }
+  // The results go to stdout: a write that failed (disk full, closed pipe or descriptor) is an
+  // error, not a success with the output lost.
+  errno = 0;
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    const int err = errno;
+    std::fprintf(stderr, "svslam %s: cannot write the result to stdout: %s\n", cmd.c_str(),
+                 err ? std::strerror(err) : "write error");
+    return code == 0 ? 1 : code;
+  }
+  return code;
 }

@@ -3,12 +3,12 @@
 #include <unistd.h>
 
 #include <cmath>
-#include <utility>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "drivers/lcm/lcm_transport.hpp"
@@ -104,22 +104,53 @@ void handleCommands(drivers::LcmLink& lcm, rt::SlamStages& work, rt::PipelineCon
   }
 }
 
+// The outputs of a run stopped before its source delivered a frame (a stop signal while an
+// lcm: source waited for its first frame): empty trajectories and stats.json; exit 0.
+int finishWithoutFrames(const config::RunConfig& cfg, const std::string& source_spec,
+                        const std::string& out_dir, const Status& why) {
+  logLine("stopped before the first frame: " + why.message());
+  auto fail = [](const Status& s) { return reportFailure("run", s); };
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec || !std::filesystem::is_directory(out_dir))
+    return fail(Status::ioError("cannot create output folder '" + out_dir + "'"));
+  if (Status s = run::clearRunOutputs(out_dir); !s) return fail(s);
+  for (const char* name : {run::files::kTrajectoryKitti, run::files::kTrajectoryTum})
+    if (Status s = run::writeFileAtomic(out_dir + "/" + name, ""); !s) return fail(s);
+  const std::string stats = run::statsJson(cfg, source_spec, run::RunSummary{}, EstimatorOutputs{},
+                                           run::StageTimes(1), rt::PipelineReport{}, "");
+  if (Status s = run::writeFileAtomic(out_dir + "/" + run::files::kStats, stats); !s)
+    return fail(s);
+  JsonObject j;
+  j.add("source", source_spec)
+      .add("mode", config::toString(cfg.mode))
+      .add("out", out_dir)
+      .add("frames", 0)
+      .add("stopped_by_signal", service::stopRequested());
+  std::printf("%s\n", j.str().c_str());
+  return 0;
+}
+
 }  // namespace
 
 int runPipeline(const std::vector<std::string>& args) {
-  ArgParser p("run",
-              "Runs the real-time pipeline (capture -> stereo -> estimator -> publisher, one\n"
-              "thread each) over a source and writes to the output folder: trajectory_kitti.txt\n"
-              "(3x4 [R|t] per frame, left camera in the first left camera's frame),\n"
-              "trajectory_tum.txt, stats.json (frames, frames without a pose and why, per-stage\n"
-              "time p50/p99/max, end-to-end latency capture -> pose published, queues, drops) and,\n"
-              "when the source knows it, groundtruth_kitti.txt. In ekf mode (default) also\n"
-              "pose_covariance.txt (6x6 per frame, row-major, [rot rad, trans m]) and\n"
-              "landmarks.ply (position + 1-sigma radii). With lcm.enabled (or --lcm-url) poses\n"
-              "with covariance, stats and the map summary go out on LCM and commands are taken.\n"
-              "SIGTERM/SIGINT stop capture, drain the frames in flight, write every output and\n"
-              "exit 0. Under systemd (Type=notify): READY=1 after the first pose, WATCHDOG=1 while\n"
-              "frames complete. Prints a JSON summary.");
+  ArgParser p(
+      "run",
+      "Runs the real-time pipeline (capture -> stereo -> estimator -> publisher, one\n"
+      "thread each) over a source and writes to the output folder: trajectory_kitti.txt\n"
+      "(3x4 [R|t] per frame, left camera in the first left camera's frame),\n"
+      "trajectory_tum.txt, stats.json (frames, frames without a pose and why, per-stage\n"
+      "time p50/p99/max, end-to-end latency capture -> pose published, queues, drops) and,\n"
+      "when the source knows it, groundtruth_kitti.txt. In ekf mode (default) also\n"
+      "pose_covariance.txt (6x6 per frame, row-major, [rot rad, trans m]) and\n"
+      "landmarks.ply (position + 1-sigma radii). With lcm.enabled (or --lcm-url) poses\n"
+      "with covariance, stats and the map summary go out on LCM and commands are taken.\n"
+      "SIGTERM/SIGINT/SIGHUP stop capture, drain the frames in flight, write every output\n"
+      "and exit 0 (also during --preload or while a source waits for its first frame).\n"
+      "An output folder used before loses the files of the earlier run that this run\n"
+      "writes (trajectories, stats.json, map files...); other files stay. Under\n"
+      "systemd (Type=notify): READY=1 after the first pose, WATCHDOG=1 while frames\n"
+      "complete. Prints a JSON summary.");
   p.addOption("source", "SRC",
               "kitti:DIR, euroc:DIR, synthetic[:key=value,...], v4l2:..., libcamera:... or "
               "lcm:CHANNEL (default: the config's 'source', else synthetic)");
@@ -135,9 +166,12 @@ int runPipeline(const std::vector<std::string>& args) {
               "replay a recorded source in real time at HZ frames per second (frames stamped as "
               "if captured then; 0 = as fast as possible, the default)");
   p.addFlag("preload", "read the whole recorded sequence into memory before the run");
-  p.addOption("lcm-url", "URL", "publish on LCM at URL (enables lcm; e.g. udpm://239.255.76.67:7667?ttl=0)");
+  p.addOption("lcm-url", "URL",
+              "publish on LCM at URL (enables lcm; e.g. udpm://239.255.76.67:7667?ttl=0)");
   if (auto code = parseCommandLine(p, args)) return *code;
   auto fail = [](const Status& s) { return reportFailure("run", s); };
+  // First: a stop signal from now on ends the run in order (exit 0, every output whole).
+  if (Status s = service::installStopSignalHandlers(); !s) return fail(s);
 
   config::RunConfig cfg;
   if (Status s = config::loadRunConfig(p.has("config") ? p.get("config") : "", cfg); !s)
@@ -159,22 +193,30 @@ int runPipeline(const std::vector<std::string>& args) {
               " does not exist (this machine has CPUs 0.." + std::to_string(ncpu - 1) + ")"));
   }
   const std::string source_spec = p.has("source") ? p.get("source") : cfg.source;
-  auto opened = drivers::openStereoSource(source_spec);
+  const std::string out_dir = p.get("out");
+  bool stopped_while_opening = false;
+  const drivers::StopQuery stop = [&] { return stopped_while_opening = service::stopRequested(); };
+  auto opened = drivers::openStereoSource(source_spec, stop);
+  if (!opened && stopped_while_opening)
+    return finishWithoutFrames(cfg, source_spec, out_dir, opened.status());
   if (!opened) return fail(opened.status());
   std::unique_ptr<drivers::StereoSource> source = std::move(*opened);
+  if (const int n = source->skippedFrames(); n > 0)
+    logLine("warning: " + std::to_string(n) +
+            " frame(s) of the source skipped: " + source->skippedFramesDetail());
   const bool live = source->size() < 0;
   if (cfg.pipeline.preload && !live) {
     logLine("reading the sequence into memory");
-    auto pre = drivers::preloadSource(std::move(source), cfg.max_frames);
+    auto pre = drivers::preloadSource(std::move(source), cfg.max_frames, stop);
     if (!pre) return fail(pre.status());
     source = std::move(*pre);
   }
 
-  const std::string out_dir = p.get("out");
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   if (ec || !std::filesystem::is_directory(out_dir))
     return fail(Status::ioError("cannot create output folder '" + out_dir + "'"));
+  if (Status s = run::clearRunOutputs(out_dir); !s) return fail(s);
 
   std::unique_ptr<drivers::LcmLink> lcm;
   if (cfg.lcm.enabled) {
@@ -182,19 +224,16 @@ int runPipeline(const std::vector<std::string>& args) {
     if (!l) return fail(l.status());
     lcm = std::move(*l);
   }
-  if (Status s = service::installStopSignalHandlers(); !s) return fail(s);
-
   rt::SlamStages work(cfg, *source, out_dir, lcm.get());
   if (Status s = work.init(); !s) return fail(s);
 
   const rt::PipelineOptions& opts = cfg.pipeline.runner;
   if (Status s = opts.validate(); !s) return fail(s);
-  const bool keep_newest = cfg.pipeline.capture_policy == config::CapturePolicy::kNewest ||
-                           (cfg.pipeline.capture_policy == config::CapturePolicy::kAuto &&
-                            (live || opts.rate_hz > 0));
-  rt::PipelineRunner runner(opts,
-                            work.graph(keep_newest ? rt::EdgePolicy::kNewest
-                                                   : rt::EdgePolicy::kBlocking));
+  const bool keep_newest =
+      cfg.pipeline.capture_policy == config::CapturePolicy::kNewest ||
+      (cfg.pipeline.capture_policy == config::CapturePolicy::kAuto && (live || opts.rate_hz > 0));
+  rt::PipelineRunner runner(
+      opts, work.graph(keep_newest ? rt::EdgePolicy::kNewest : rt::EdgePolicy::kBlocking));
   work.setTimings(&runner.timings());
   std::vector<std::unique_ptr<rt::FrameSlot>> slots;
   const StereoCalibration& calib = source->calibration();
@@ -260,10 +299,13 @@ int runPipeline(const std::vector<std::string>& args) {
   if (Status s = work.finish(); !s && error.empty()) error = s.message();
   const run::StageTimes times = work.stageTimes();
   const rt::PipelineReport& rep = runner.report();
-  if (Status s = run::writeFileAtomic(out_dir + "/stats.json",
-                                      run::statsJson(cfg, source_spec, work.summary(),
-                                                     work.outputs(), times, rep, error,
-                                                     work.mapJson(rep.after_publish_skipped)));
+  run::RunSummary summary = work.summary();
+  summary.source_frames_skipped = source->skippedFrames();
+  summary.source_frames_skipped_detail = source->skippedFramesDetail();
+  if (Status s =
+          run::writeFileAtomic(out_dir + "/" + run::files::kStats,
+                               run::statsJson(cfg, source_spec, summary, work.outputs(), times, rep,
+                                              error, work.mapJson(rep.after_publish_skipped)));
       !s)
     return fail(s);
   if (!error.empty()) return fail(Status::ioError(error));
@@ -274,6 +316,7 @@ int runPipeline(const std::vector<std::string>& args) {
       .add("threaded", !opts.sequential)
       .add("frames", work.summary().frames)
       .add("frames_tracked", work.summary().tracked)
+      .add("source_frames_skipped", summary.source_frames_skipped)
       .add("frames_dropped", static_cast<std::int64_t>(rep.dropped))
       .add("stopped_by_signal", service::stopRequested())
       .add("fps", rep.fps, 2)

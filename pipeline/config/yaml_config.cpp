@@ -1,12 +1,28 @@
 #include "pipeline/config/yaml_config.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
 namespace svslam::config {
 
 ConfigReader::ConfigReader() : root_(YAML::NodeType::Map), name_("(defaults)") {}
+
+Status ConfigReader::index(const YAML::Node& n, const std::string& prefix) {
+  for (const auto& kv : n) {
+    const std::string where = prefix.empty() ? "the top level" : "'" + prefix + "'";
+    if (!kv.first.IsScalar())
+      return Status::invalidArgument(name_ + ": a key under " + where + " is not a plain name");
+    const std::string path = prefix.empty() ? kv.first.Scalar() : prefix + "." + kv.first.Scalar();
+    if (!keys_.emplace(path, kv.second).second)
+      return Status::invalidArgument(name_ + ": duplicate key '" + path + "'");
+    if (keys_.size() > kMaxKeys)
+      return Status::invalidArgument(name_ + ": more than " + std::to_string(kMaxKeys) + " keys");
+    if (kv.second.IsMap()) SVSLAM_TRY(index(kv.second, path));
+  }
+  return Status::ok();
+}
 
 Result<ConfigReader> ConfigReader::fromString(const std::string& text, const std::string& name) {
   ConfigReader r;
@@ -18,30 +34,25 @@ Result<ConfigReader> ConfigReader::fromString(const std::string& text, const std
   }
   if (r.root_.IsNull()) r.root_ = YAML::Node(YAML::NodeType::Map);
   if (!r.root_.IsMap()) return Status::invalidArgument(name + ": the top level must be a map");
+  if (Status s = r.index(r.root_, ""); !s) return s;
   return r;
 }
 
 Result<ConfigReader> ConfigReader::fromFile(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    return Status::invalidArgument("configuration file '" + path + "' is a directory");
   std::ifstream f(path, std::ios::binary);
   if (!f) return Status::notFound("cannot open configuration file '" + path + "'");
   std::ostringstream ss;
   ss << f.rdbuf();
+  if (f.bad()) return Status::ioError("cannot read configuration file '" + path + "'");
   return fromString(ss.str(), path);
 }
 
 YAML::Node ConfigReader::find(const std::string& key) const {
-  YAML::Node n = YAML::Clone(root_);
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t dot = key.find('.', start);
-    const std::string part = key.substr(start, dot == std::string::npos ? dot : dot - start);
-    if (!n.IsMap()) return YAML::Node(YAML::NodeType::Undefined);
-    YAML::Node child = n[part];
-    if (!child.IsDefined()) return YAML::Node(YAML::NodeType::Undefined);
-    n = child;
-    if (dot == std::string::npos) return n;
-    start = dot + 1;
-  }
+  const auto it = keys_.find(key);
+  return it == keys_.end() ? YAML::Node(YAML::NodeType::Undefined) : it->second;
 }
 
 bool ConfigReader::has(const std::string& key) const { return find(key).IsDefined(); }
@@ -181,9 +192,15 @@ bool firstUnused(const YAML::Node& n, const std::string& prefix, const std::set<
 
 Status ConfigReader::finish() const {
   std::string unused;
-  if (firstUnused(root_, "", used_, unused))
-    return Status::invalidArgument(name_ + ": unknown key '" + unused + "'");
-  return Status::ok();
+  if (!firstUnused(root_, "", used_, unused)) return Status::ok();
+  // A value where a section of keys is expected ("detector: 5"): say so, not "unknown key".
+  const std::string section = unused + ".";
+  const auto it = used_.lower_bound(section);
+  if (it != used_.end() && it->compare(0, section.size(), section) == 0)
+    return Status::invalidArgument(name_ + ": key '" + unused +
+                                   "' must be a mapping of keys (e.g. '" + *it +
+                                   "'), not a single value or a list");
+  return Status::invalidArgument(name_ + ": unknown key '" + unused + "'");
 }
 
 }  // namespace svslam::config

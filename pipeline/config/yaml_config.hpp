@@ -3,10 +3,13 @@
 // maps ("stereo_match.min_zncc"). Each read() leaves the target untouched when the key is
 // absent, and fails with a message naming the key on a wrong type or an out-of-range value.
 // finish() fails on the first key of the file that no read() asked for (a typo, a key of an
-// older version), so no setting is silently ignored.
+// older version), so no setting is silently ignored. A key given twice in one map is an error.
+// The file's key paths are indexed once when it is loaded (at most kMaxKeys), so a read costs
+// a map lookup whatever the size of the file.
 #include <yaml-cpp/yaml.h>
 
 #include <cstdint>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -28,6 +31,7 @@ class ConfigReader {
   ConfigReader();
   static Result<ConfigReader> fromFile(const std::string& path);
   static Result<ConfigReader> fromString(const std::string& text, const std::string& name);
+  static constexpr std::size_t kMaxKeys = 100000;  // key paths in a file (aliases expanded)
 
   Status read(const std::string& key, double& v, double min_value, double max_value);
   Status read(const std::string& key, float& v, double min_value, double max_value);
@@ -49,6 +53,8 @@ class ConfigReader {
 
  private:
   YAML::Node find(const std::string& key) const;  // undefined node when absent
+  // Indexes the key paths under `n` (a map) into keys_; error on a duplicate key.
+  Status index(const YAML::Node& n, const std::string& prefix);
   Status error(const std::string& key, const std::string& what) const;
   // The number at `key` checked against [min_value, max_value]; present = false when absent.
   Status readNumber(const std::string& key, bool& present, double& x, double min_value,
@@ -57,6 +63,7 @@ class ConfigReader {
   template <typename T>
   void assign(const std::string& key, T& v, const T& x);
   YAML::Node root_;
+  std::map<std::string, YAML::Node> keys_;  // every key path of the file ("a.b.c") -> its value
   std::string name_;
   std::set<std::string> used_;
   std::set<std::string> changed_;

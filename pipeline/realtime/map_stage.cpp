@@ -8,6 +8,7 @@
 #include "map/map_frame.hpp"
 #include "pipeline/cli/json_writer.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
+#include "pipeline/run/run_outputs.hpp"
 
 namespace svslam::rt {
 
@@ -115,13 +116,13 @@ Status MapStage::writeFiles(const std::string& dir) {
     geo = {(*cfg_.map_geo_origin)[0], (*cfg_.map_geo_origin)[1], (*cfg_.map_geo_origin)[2]};
     g = &geo;
   }
-  if (Status s = drivers::writeDemGeoTiff(dir + "/dem.tif", r, g); !s) return s;
-  if (Status s = drivers::writeOrthoTiff(dir + "/ortho.tif", r, g); !s) return s;
-  if (Status s = drivers::writeOrthoPng(dir + "/ortho.png", r); !s) return s;
-  if (Status s = drivers::writeHillshadePng(dir + "/dem_hillshade.png", r); !s) return s;
+  if (Status s = drivers::writeDemGeoTiff(dir + "/" + run::files::kDem, r, g); !s) return s;
+  if (Status s = drivers::writeOrthoTiff(dir + "/" + run::files::kOrthoTiff, r, g); !s) return s;
+  if (Status s = drivers::writeOrthoPng(dir + "/" + run::files::kOrthoPng, r); !s) return s;
+  if (Status s = drivers::writeHillshadePng(dir + "/" + run::files::kHillshade, r); !s) return s;
   map::DemRaster gt = r;
   if (r.cols > 0 && source_.groundTruthDem(R_map_world_, frames_seen_, gt))
-    return drivers::writeDemGeoTiff(dir + "/groundtruth_dem.tif", gt, g);
+    return drivers::writeDemGeoTiff(dir + "/" + run::files::kGroundTruthDem, gt, g);
   return Status::ok();
 }
 

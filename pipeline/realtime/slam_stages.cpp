@@ -202,7 +202,7 @@ void SlamStages::applySaveMap(TimeNs t_ns) {
     save_path = save_path_;
   }
   if (save_seq < 0) return;
-  const std::string path = save_path.empty() ? out_dir_ + "/landmarks.ply" : save_path;
+  const std::string path = save_path.empty() ? out_dir_ + "/" + run::files::kLandmarks : save_path;
   const Status ws = writeMap(path);
   if (map_stage_) {  // the mapper writes its files and answers for both
     const std::size_t slash = path.find_last_of('/');
@@ -245,7 +245,8 @@ void SlamStages::publishMapSummary(TimeNs t_ns) {
 Status SlamStages::finish() {
   publisher_->close();
   Status s;
-  if (estimator_ && estimator_->outputs().landmark_map) s = writeMap(out_dir_ + "/landmarks.ply");
+  if (estimator_ && estimator_->outputs().landmark_map)
+    s = writeMap(out_dir_ + "/" + run::files::kLandmarks);
   if (map_stage_) {
     const Status ms = map_stage_->finish();
     if (s) s = ms;

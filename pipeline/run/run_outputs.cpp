@@ -4,9 +4,27 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <sstream>
+#include <system_error>
 
 namespace svslam::run {
+
+Status clearRunOutputs(const std::string& dir) {
+  namespace fs = std::filesystem;
+  for (const char* name : files::kAll) {
+    for (const std::string& file : {std::string(name), std::string(name) + ".tmp"}) {
+      const fs::path path = fs::path(dir) / file;
+      std::error_code ec;
+      const fs::file_status st = fs::symlink_status(path, ec);
+      if (ec || !fs::exists(st) || fs::is_directory(st)) continue;
+      if (!fs::remove(path, ec) || ec)
+        return Status::ioError("cannot remove '" + path.string() +
+                               "' of an earlier run: " + (ec ? ec.message() : "not removed"));
+    }
+  }
+  return Status::ok();
+}
 
 TrajectoryWriter::~TrajectoryWriter() { close(); }
 
@@ -141,7 +159,8 @@ double percentile(std::vector<double> v, double p) {
   if (v.empty()) return NAN;
   std::sort(v.begin(), v.end());
   const double rank = std::ceil(p / 100.0 * static_cast<double>(v.size()));
-  const std::size_t i = static_cast<std::size_t>(std::clamp(rank, 1.0, static_cast<double>(v.size())));
+  const std::size_t i =
+      static_cast<std::size_t>(std::clamp(rank, 1.0, static_cast<double>(v.size())));
   return v[i - 1];
 }
 
@@ -179,7 +198,8 @@ Status writeFileAtomic(const std::string& path, const std::string& text) {
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     std::remove(tmp.c_str());
-    return Status::ioError("cannot rename '" + tmp + "' to '" + path + "': " + std::strerror(errno));
+    return Status::ioError("cannot rename '" + tmp + "' to '" + path +
+                           "': " + std::strerror(errno));
   }
   return Status::ok();
 }

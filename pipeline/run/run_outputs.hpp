@@ -20,6 +20,31 @@
 
 namespace svslam::run {
 
+// The names of the files `svslam run` writes into its output folder (which of them a run
+// writes depends on its mode, map and source).
+namespace files {
+inline constexpr const char* kTrajectoryKitti = "trajectory_kitti.txt";
+inline constexpr const char* kTrajectoryTum = "trajectory_tum.txt";
+inline constexpr const char* kGroundTruthKitti = "groundtruth_kitti.txt";
+inline constexpr const char* kPoseCovariance = "pose_covariance.txt";
+inline constexpr const char* kLandmarks = "landmarks.ply";
+inline constexpr const char* kStats = "stats.json";
+inline constexpr const char* kDem = "dem.tif";
+inline constexpr const char* kOrthoTiff = "ortho.tif";
+inline constexpr const char* kOrthoPng = "ortho.png";
+inline constexpr const char* kHillshade = "dem_hillshade.png";
+inline constexpr const char* kGroundTruthDem = "groundtruth_dem.tif";
+inline constexpr const char* kAll[] = {
+    kTrajectoryKitti, kTrajectoryTum, kGroundTruthKitti, kPoseCovariance, kLandmarks, kStats, kDem,
+    kOrthoTiff,       kOrthoPng,      kHillshade,        kGroundTruthDem};
+}  // namespace files
+
+// A run owns its output folder: removes from `dir` every file of files::kAll (and the
+// temporary "<name>.tmp" of an interrupted atomic write), so that no file of an earlier run is
+// left beside the new ones. Other files, and folders, are left alone. Error naming the file
+// that cannot be removed.
+Status clearRunOutputs(const std::string& dir);
+
 // One line per pose in a KITTI and a TUM file; each line is flushed when appended.
 class TrajectoryWriter {
  public:

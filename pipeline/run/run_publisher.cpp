@@ -10,14 +10,15 @@ RunPublisher::RunPublisher(const config::RunConfig& cfg, const std::string& out_
     : cfg_(cfg), out_dir_(out_dir), outputs_(outputs), lcm_(lcm), captured_(captured) {}
 
 Status RunPublisher::open(bool ground_truth) {
-  if (Status s = traj_.open(out_dir_ + "/trajectory_kitti.txt", out_dir_ + "/trajectory_tum.txt");
+  if (Status s = traj_.open(out_dir_ + "/" + files::kTrajectoryKitti,
+                            out_dir_ + "/" + files::kTrajectoryTum);
       !s)
     return s;
   if (ground_truth) {
-    if (Status s = gt_.open(out_dir_ + "/groundtruth_kitti.txt", ""); !s) return s;
+    if (Status s = gt_.open(out_dir_ + "/" + files::kGroundTruthKitti, ""); !s) return s;
   }
   if (outputs_.pose_covariance) {
-    if (Status s = cov_file_.open(out_dir_ + "/pose_covariance.txt"); !s) return s;
+    if (Status s = cov_file_.open(out_dir_ + "/" + files::kPoseCovariance); !s) return s;
     cov_line_.reserve(36 * 32);  // 36 numbers of at most 31 characters each
   }
   return Status::ok();

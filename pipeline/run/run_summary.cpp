@@ -68,6 +68,7 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
       .add("frames", s.frames)
       .add("frames_tracked", s.tracked)
       .add("frames_without_pose", s.frames - s.tracked)
+      .add("source_frames_skipped", s.source_frames_skipped)
       .addRaw("without_pose_reasons", fails.str())
       .addRaw("without_pose_frames", list)
       .add("mean_corners", s.sum_corners / n, 1)
@@ -95,6 +96,7 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
         .add("mean_landmark_search_no_stereo", s.sum_no_stereo / n, 2)
         .add("ekf_median_ms", times.median("ekf"), 3);
   }
+  if (s.source_frames_skipped > 0) j.add("source_skipped_frames", s.source_frames_skipped_detail);
   j.addRaw("stage_ms", times.json());
   JsonObject p;
   p.add("threaded", !cfg.pipeline.runner.sequential)

@@ -23,6 +23,9 @@ struct RunSummary {
   double sum_observed = 0, sum_reperceived = 0, sum_gated = 0, sum_in_state = 0;
   double sum_visible = 0, sum_no_match = 0, sum_no_stereo = 0;
   int max_in_state = 0, landmarks_in_map = 0, added = 0, retired = 0, restored = 0;
+  // Frames of the recording the source left out (kitti: one side missing) and their names.
+  int source_frames_skipped = 0;
+  std::string source_frames_skipped_detail;
 
   // Adds one processed frame (source index `frame`).
   void add(int frame, const SlamFrameResult& r);

@@ -1,5 +1,6 @@
 #include "pipeline/service/stop_signal.hpp"
 
+#include <pthread.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
 
@@ -17,7 +18,7 @@ static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs l
 
 std::atomic<int> g_requested{0};     // 1 once a stop was requested
 std::atomic<int> g_signal{0};        // first signal number that requested it, 0 = none
-std::atomic<int> g_signal_count{0};  // SIGTERM/SIGINT received since the last reset
+std::atomic<int> g_signal_count{0};  // stop signals received since the last reset
 std::atomic<int> g_event_fd{-1};     // eventfd, -1 until created
 
 void wakePollers() {
@@ -73,14 +74,15 @@ Status installStopSignalHandlers() {
   sa.sa_handler = onStopSignal;
   sa.sa_flags = 0;  // no SA_RESTART: blocking calls in the receiving thread return EINTR
   sigemptyset(&sa.sa_mask);
-  sigaddset(&sa.sa_mask, SIGTERM);  // the two handlers never interleave
+  sigaddset(&sa.sa_mask, SIGTERM);  // the handlers never interleave
   sigaddset(&sa.sa_mask, SIGINT);
-  for (const int sig : {SIGTERM, SIGINT}) {
-    if (sigaction(sig, &sa, nullptr) != 0) {
-      return Status::ioError(
-          errnoText(sig == SIGTERM ? "sigaction(SIGTERM)" : "sigaction(SIGINT)"));
-    }
+  sigaddset(&sa.sa_mask, SIGHUP);
+  for (const int sig : {SIGTERM, SIGINT, SIGHUP}) {
+    if (sigaction(sig, &sa, nullptr) != 0)
+      return Status::ioError(errnoText(("sigaction(" + std::string(strsignal(sig)) + ")").c_str()));
   }
+  if (pthread_sigmask(SIG_UNBLOCK, &sa.sa_mask, nullptr) != 0)
+    return Status::ioError("pthread_sigmask failed: cannot unblock the stop signals");
   return Status::ok();
 }
 

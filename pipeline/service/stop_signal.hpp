@@ -1,6 +1,7 @@
 #pragma once
-// Orderly stop on SIGTERM (systemd's KillSignal) and SIGINT (Ctrl-C), plus programmatic stop
-// requests (e.g. the LCM "shutdown" command).
+// Orderly stop on SIGTERM (systemd's KillSignal), SIGINT (Ctrl-C) and SIGHUP (the terminal or
+// the ssh session went away), plus programmatic stop requests (e.g. the LCM "shutdown"
+// command).
 //
 // State is process-wide (signals are): a lock-free std::atomic<int> flag that any thread may poll
 // with stopRequested(), and an eventfd that becomes readable on the first stop request so a
@@ -10,7 +11,7 @@
 // Handlers are installed with sigaction and without SA_RESTART, so blocking system calls of the
 // thread that receives the signal return EINTR instead of resuming.
 //
-// Double signal: the first SIGTERM/SIGINT requests the stop; a second one (either of the two)
+// Double signal: the first SIGTERM/SIGINT/SIGHUP requests the stop; a second one (any of them)
 // restores the default action and re-raises itself, so a double Ctrl-C terminates at once even
 // if draining hangs. A programmatic requestStop() does not count as a signal.
 //
@@ -20,14 +21,17 @@
 
 namespace svslam::service {
 
-// Creates the eventfd (once) and installs the SIGTERM and SIGINT handlers. Idempotent.
-// Errors (eventfd or sigaction failing) are returned with errno's text.
+// Creates the eventfd (once), installs the SIGTERM, SIGINT and SIGHUP handlers and unblocks
+// the three signals in the calling thread (a signal that arrived while they were blocked, e.g.
+// inherited blocked from the parent, is handled then). Idempotent. Call it first thing, before
+// any thread is started (threads inherit the mask). Errors (eventfd or sigaction failing) are
+// returned with errno's text.
 Status installStopSignalHandlers();
 
 // True once a stop was requested by a signal or by requestStop().
 bool stopRequested();
 
-// The signal (SIGTERM = 15, SIGINT = 2) that first requested the stop; 0 when no signal did
+// The signal (SIGTERM = 15, SIGINT = 2, SIGHUP = 1) that first requested the stop; 0 when none
 // (no stop yet, or a programmatic requestStop()).
 int stopSignalNumber();
 

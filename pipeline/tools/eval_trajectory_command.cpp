@@ -1,8 +1,8 @@
 // svslam eval-trajectory: drift, ATE and RPE of an estimated trajectory against ground truth.
 #include <cmath>
 #include <cstdio>
-#include <sstream>
 #include <cstdlib>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -64,6 +64,9 @@ int runEvalTrajectory(const std::vector<std::string>& args) {
   if (Status s = params.validate(); !s) return fail(s);
   auto max_dt = p.getDouble("max-dt");
   if (!max_dt) return fail(max_dt.status());
+  if (*max_dt < 0.0)
+    return fail(
+        Status::invalidArgument("--max-dt: " + p.get("max-dt") + " is negative (seconds, >= 0)"));
 
   auto gt = drivers::readTrajectory(p.get("gt"));
   if (!gt) return fail(gt.status());
@@ -98,31 +101,49 @@ int runEvalTrajectory(const std::vector<std::string>& args) {
       all.push_back(P);
     }
     if (all.size() != est->poses.size())
-      return fail(Status::invalidArgument(
-          p.get("cov") + " has " + std::to_string(all.size()) + " covariances for " +
-          std::to_string(est->poses.size()) + " estimated poses"));
+      return fail(Status::invalidArgument(p.get("cov") + " has " + std::to_string(all.size()) +
+                                          " covariances for " + std::to_string(est->poses.size()) +
+                                          " estimated poses"));
     for (std::size_t i : est_index) covs.push_back(all[i]);
   }
   auto m = evaluateTrajectory(g, e, params);
   if (!m) return fail(m.status());
 
+  // A length with no segment has no drift: null and the reason, not 0 %.
   std::string segs = "[";
+  int segments_found = 0;
   for (std::size_t i = 0; i < m->segments.size(); ++i) {
     const auto& sd = m->segments[i];
+    segments_found += sd.count;
     JsonObject js;
-    js.add("length_m", sd.length_m, 2)
-        .add("count", sd.count)
-        .add("t_err_pct", sd.t_err_pct)
-        .add("r_err_deg_per_m", sd.r_err_deg_per_m, 6);
+    js.add("length_m", sd.length_m, 2).add("count", sd.count);
+    if (sd.count > 0) {
+      js.add("t_err_pct", sd.t_err_pct).add("r_err_deg_per_m", sd.r_err_deg_per_m, 6);
+    } else {
+      char why[160];
+      if (m->path_length_m < sd.length_m)
+        std::snprintf(why, sizeof why, "the ground-truth path (%.2f m) is shorter than %.2f m",
+                      m->path_length_m, sd.length_m);
+      else
+        std::snprintf(
+            why, sizeof why,
+            "no frames %.2f m apart along the ground truth (segments start every %d frames)",
+            sd.length_m, params.step_frames);
+      js.addRaw("t_err_pct", "null").addRaw("r_err_deg_per_m", "null").add("reason", why);
+    }
     segs += (i ? ", " : "") + js.str();
   }
   segs += "]";
   JsonObject j;
-  j.add("frames", m->frames)
-      .add("path_length_m", m->path_length_m, 3)
-      .add("t_err_pct", m->t_err_pct)
-      .add("r_err_deg_per_m", m->r_err_deg_per_m, 6)
-      .addRaw("segments", segs)
+  j.add("frames", m->frames).add("path_length_m", m->path_length_m, 3);
+  if (segments_found > 0) {
+    j.add("t_err_pct", m->t_err_pct).add("r_err_deg_per_m", m->r_err_deg_per_m, 6);
+  } else {
+    j.addRaw("t_err_pct", "null")
+        .addRaw("r_err_deg_per_m", "null")
+        .add("t_err_reason", "no segment of any of the --segments lengths");
+  }
+  j.addRaw("segments", segs)
       .add("align", p.get("align"))
       .add("ate_rmse_m", m->ate_rmse_m)
       .add("rpe_trans_rmse_m", m->rpe_trans_rmse_m)

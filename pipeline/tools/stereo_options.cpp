@@ -10,7 +10,7 @@ void addStereoOptions(ArgParser& p) {
   p.addOption("method", "census|sad", "matching cost: census (Hamming) or sad (8-bit intensities)",
               "census");
   p.addOption("window", "WxH", "aggregation window, odd sides <= 31", "9x9");
-  p.addOption("census", "WxH", "census window, odd sides, at most 64 neighbours", "9x7");
+  p.addOption("census", "WxH", "census window, odd sides >= 3, at most 64 neighbours", "9x7");
   p.addOption("prefilter", "none|mean|xsobel", "SAD prefilter (as OpenCV BM)", "xsobel");
   p.addOption("prefilter-cap", "N", "SAD prefilter clip, grey levels 1..63", "31");
   p.addOption("prefilter-size", "N", "SAD mean-removal window side, odd 3..21", "9");

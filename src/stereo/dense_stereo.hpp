@@ -44,8 +44,8 @@ bool parseSadPrefilter(const std::string& s, SadPrefilter& out);
 
 struct DenseStereoParams {
   MatchingCost cost = MatchingCost::kCensus;
-  int census_w = 9;  // census window width, px, odd, census_w * census_h - 1 <= 64
-  int census_h = 7;  // census window height, px, odd
+  int census_w = 9;  // census window width, px, odd >= 3, census_w * census_h - 1 <= 64
+  int census_h = 7;  // census window height, px, odd >= 3
   int window_w = 9;  // aggregation window width, px, odd, 1..31
   int window_h = 9;  // aggregation window height, px, odd, 1..31
   SadPrefilter prefilter = SadPrefilter::kXSobel;  // SAD only

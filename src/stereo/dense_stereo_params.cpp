@@ -52,11 +52,12 @@ Status DenseStereoParams::validate() const {
   auto bad = [](const std::string& m) { return Status::invalidArgument(m); };
   auto odd = [](int v) { return v > 0 && v % 2 == 1; };
   if (cost == MatchingCost::kCensus) {
-    if (!odd(census_w) || !odd(census_h)) return bad("census window sides must be odd and > 0");
+    if (!odd(census_w) || !odd(census_h) || census_w < 3 || census_h < 3)
+      return bad("census window " + std::to_string(census_w) + "x" + std::to_string(census_h) +
+                 ": each side must be odd and at least 3");
     if (census_w * census_h - 1 > 64)
       return bad("census window " + std::to_string(census_w) + "x" + std::to_string(census_h) +
                  " has more than 64 neighbours (use at most 9x7 or 7x9)");
-    if (census_w * census_h < 9) return bad("census window must be at least 3x3");
   } else {
     if (prefilter_cap < 1 || prefilter_cap > 63) return bad("prefilter_cap must be in 1..63");
     if (prefilter == SadPrefilter::kMeanRemoval &&

@@ -13,6 +13,7 @@
 #include "drivers/files/image_io.hpp"
 #include "drivers/files/opencv_view.hpp"
 #include "drivers/synthetic/synthetic_pair.hpp"
+#include "pipeline/cli/json_writer.hpp"
 
 namespace fs = std::filesystem;
 using svslam::test::slurp;
@@ -209,6 +210,98 @@ TEST_F(Cli, EvalTrajectoryScoresAndRejectsBadInput) {
   { std::ofstream(path("short.txt")) << "1 0 0 0 0 1 0 0 0 0 1 0\n"; }
   expectError("eval-trajectory --gt " + path("gt.txt") + " --est " + path("short.txt"),
               "paired by index");
+  expectError(
+      "eval-trajectory --gt " + path("gt.txt") + " --est " + path("est.txt") + " --max-dt -1",
+      "--max-dt: -1 is negative");
+  {
+    std::ofstream f(path("skew.txt"));  // line 2: a scaled, not orthonormal, 3x3 part
+    for (int i = 0; i < 30; ++i)
+      f << (i == 1 ? "2 0 0 0 0 1 0 0 0 0 1 " : "1 0 0 0 0 1 0 0 0 0 1 ") << i << "\n";
+  }
+  expectError("eval-trajectory --gt " + path("gt.txt") + " --est " + path("skew.txt"),
+              "skew.txt:2: the 3x3 part is not a rotation");
+}
+
+TEST_F(Cli, EvalTrajectorySegmentsWithoutDataAreNull) {
+  {
+    std::ofstream f(path("gt.txt"));
+    for (int i = 0; i < 30; ++i) f << "1 0 0 0 0 1 0 0 0 0 1 " << i << "\n";  // 29 m
+  }
+  const CliRun r = run("eval-trajectory --gt " + path("gt.txt") + " --est " + path("gt.txt") +
+                       " --segments 5,100 --step 1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  // 5 m: scored; 100 m: longer than the path, so no drift (null and why), not 0 %.
+  EXPECT_NE(r.out.find("\"length_m\": 5.00, \"count\": 24, \"t_err_pct\": 0.0000"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("\"length_m\": 100.00, \"count\": 0, \"t_err_pct\": null, "
+                       "\"r_err_deg_per_m\": null, \"reason\": \"the ground-truth path (29.00 m) "
+                       "is shorter than 100.00 m\""),
+            std::string::npos)
+      << r.out;
+  const CliRun none = run("eval-trajectory --gt " + path("gt.txt") + " --est " + path("gt.txt") +
+                          " --segments 100 --step 1");
+  ASSERT_EQ(none.code, 0) << none.err;
+  EXPECT_NE(none.out.find("\"t_err_pct\": null"), std::string::npos) << none.out;
+  EXPECT_NE(none.out.find("\"t_err_reason\""), std::string::npos) << none.out;
+}
+
+TEST_F(Cli, FailedWriteOfTheResultIsAnError) {
+  // The JSON result lost (disk full, stdout closed) is a failure, not exit 0.
+  const std::string cmd = std::string(SVSLAM_CLI) + " disparity --left " + path("l.png") +
+                          " --right " + path("r.png") + " --max-disp 32";
+  if (fs::exists("/dev/full")) {
+    const int code =
+        svslam::test::exitCode(std::system((cmd + " > /dev/full 2> " + path("err.txt")).c_str()));
+    EXPECT_EQ(code, 1) << slurp(path("err.txt"));
+    EXPECT_NE(slurp(path("err.txt")).find("cannot write the result to stdout"), std::string::npos)
+        << slurp(path("err.txt"));
+  }
+  const int closed =
+      svslam::test::exitCode(std::system((cmd + " >&- 2> " + path("err.txt")).c_str()));
+  EXPECT_EQ(closed, 1) << slurp(path("err.txt"));
+  EXPECT_NE(slurp(path("err.txt")).find("cannot write the result to stdout"), std::string::npos)
+      << slurp(path("err.txt"));
+  EXPECT_EQ(
+      run("disparity --left " + path("l.png") + " --right " + path("r.png") + " --max-disp 32")
+          .code,
+      0);
+}
+
+TEST_F(Cli, MessagesAgreeWithTheChecks) {
+  const std::string pair = " --left " + path("l.png") + " --right " + path("r.png");
+  // Each side of the census window is odd and at least 3: 1x3 and 1x63 alike.
+  expectError("disparity" + pair + " --max-disp 16 --census 1x3",
+              "each side must be odd and at least 3");
+  expectError("disparity" + pair + " --max-disp 16 --census 1x63",
+              "each side must be odd and at least 3");
+  // Too large is not "not of the form WxH".
+  expectError("disparity --synthetic-size 100000x100000", "is too large (each side at most 8192)");
+  expectError("disparity --synthetic-size 100x", "not of the form WxH");
+}
+
+TEST(JsonWriter, InvalidUtf8BecomesTheReplacementCharacter) {
+  using svslam::cli::jsonEscape;
+  EXPECT_EQ(jsonEscape("a\xff"
+                       "b"),
+            "\"a\\ufffdb\"");
+  EXPECT_EQ(jsonEscape("\xc3\xa9t\xc3\xa9"), "\"\xc3\xa9t\xc3\xa9\"");  // valid UTF-8 kept
+  EXPECT_EQ(jsonEscape("\xe2\x82\xac"), "\"\xe2\x82\xac\"");            // 3 bytes (euro sign)
+  EXPECT_EQ(jsonEscape("\xf0\x9f\x98\x80"), "\"\xf0\x9f\x98\x80\"");    // 4 bytes
+  EXPECT_EQ(jsonEscape("\xc3"), "\"\\ufffd\"");                         // truncated
+  EXPECT_EQ(jsonEscape("\xc0\xaf"), "\"\\ufffd\\ufffd\"");              // overlong '/'
+  EXPECT_EQ(jsonEscape("\xed\xa0\x80"), "\"\\ufffd\\ufffd\\ufffd\"");   // a surrogate
+  EXPECT_EQ(jsonEscape("q\"\\\n\x01"), "\"q\\\"\\\\\\n\\u0001\"");
+}
+
+TEST_F(Cli, InvalidUtf8InAPathKeepsTheJsonValid) {
+  std::ofstream(path("c.yaml")) << "dense_stereo: {enabled: false}\nmap: {enabled: false}\n";
+  const std::string out = path("out\xff\xfe");
+  const CliRun r = run("run --source synthetic:width=320,height=240,frames=2 --config " +
+                       path("c.yaml") + " --out '" + out + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("\\ufffd\\ufffd"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find('\xff'), std::string::npos) << r.out;
 }
 
 TEST_F(Cli, ColourInputIsConvertedToGrey) {

@@ -76,20 +76,21 @@ void runInNamespace(const std::string& name) {
   const std::string self = fs::read_symlink("/proc/self/exe").string();
   const std::string cmd =
       "unshare -rn sh -c 'ip link set lo up && ip route add 239.0.0.0/8 dev lo && "
-      "SVSLAM_LCM_PIPELINE_INNER=" + name + " exec \"" + self +
-      "\" --gtest_filter=LcmPipeline.Inner" + name + "'";
+      "SVSLAM_LCM_PIPELINE_INNER=" +
+      name + " exec \"" + self + "\" --gtest_filter=LcmPipeline.Inner" + name + "'";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << "inner test failed (output above)";
 }
 
 TEST(LcmPipeline, InnerListenerGetsEveryPose) {
-  if (!inner("ListenerGetsEveryPose")) GTEST_SKIP() << "runs inside the namespace of ListenerGetsEveryPose";
+  if (!inner("ListenerGetsEveryPose"))
+    GTEST_SKIP() << "runs inside the namespace of ListenerGetsEveryPose";
   const fs::path dir = fs::temp_directory_path() / ("svslam_lcmpipe_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   constexpr int kFrames = 12;
-  const pid_t listener = spawn(std::string(SVSLAM_CLI) + " listen --url '" + kUrl + "' --count " +
-                               std::to_string(kFrames) + " --timeout-s 60 > " +
-                               (dir / "poses.jsonl").string() + " 2> " +
-                               (dir / "listen_err.txt").string());
+  const pid_t listener =
+      spawn(std::string(SVSLAM_CLI) + " listen --url '" + kUrl + "' --count " +
+            std::to_string(kFrames) + " --timeout-s 60 > " + (dir / "poses.jsonl").string() +
+            " 2> " + (dir / "listen_err.txt").string());
   std::this_thread::sleep_for(500ms);  // subscribed before the first pose
   const std::string run = std::string(SVSLAM_CLI) +
                           " run --source synthetic:width=320,height=240,frames=12 --lcm-url '" +
@@ -108,6 +109,46 @@ TEST(LcmPipeline, InnerListenerGetsEveryPose) {
 }
 
 TEST(LcmPipeline, ListenerGetsEveryPose) { runInNamespace("ListenerGetsEveryPose"); }
+
+// `svslam listen --count N` on a replayed file:// log: exit 0 once it printed N poses (the log
+// may end right after them); exit 1 naming the log when it ends before N.
+TEST(LcmPipeline, ListenOnAReplayedLog) {
+  const fs::path dir = fs::temp_directory_path() / ("svslam_listen_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string log = (dir / "poses.lcmlog").string();
+  {
+    LcmParams p;
+    p.url = "file://" + log + "?mode=w";
+    auto writer = LcmLink::open(p);
+    ASSERT_TRUE(writer.isOk()) << writer.status().message();
+    for (int i = 0; i < 5; ++i) {
+      PoseReport r;
+      r.seq = i;
+      r.t_ns = 1'000'000'000 + i * 100'000'000;
+      r.publish_t_ns = r.t_ns;
+      for (int k = 0; k < 6; ++k) r.cov(k, k) = 1e-4;
+      ASSERT_TRUE((*writer)->publishPose(r).isOk());
+    }
+  }
+  auto listen = [&](int count, std::string& out, std::string& err) {
+    const int rc = test::runSvslam("listen --url 'file://" + log + "?speed=0' --count " +
+                                       std::to_string(count) + " --timeout-s 20",
+                                   dir / "out.txt", dir / "err.txt");
+    out = slurp(dir / "out.txt");
+    err = slurp(dir / "err.txt");
+    return rc;
+  };
+  std::string out, err;
+  EXPECT_EQ(listen(5, out, err), 0) << err;
+  EXPECT_EQ(countLines(out, "\"type\": \"pose\""), 5) << out;
+  EXPECT_EQ(listen(3, out, err), 0) << err;
+  EXPECT_EQ(countLines(out, "\"type\": \"pose\""), 3) << out;
+  EXPECT_EQ(listen(8, out, err), 1);
+  EXPECT_EQ(countLines(out, "\"type\": \"pose\""), 5) << out;
+  EXPECT_NE(err.find("ended after 5 of the 8 poses"), std::string::npos) << err;
+  EXPECT_NE(err.find(log), std::string::npos) << err;
+  fs::remove_all(dir);
+}
 
 // Collects the command_status_t answers.
 struct StatusSink {
@@ -138,12 +179,14 @@ struct StatusSink {
 };
 
 TEST(LcmPipeline, InnerCommandsAreAppliedAndAnswered) {
-  if (!inner("CommandsAreAppliedAndAnswered")) GTEST_SKIP() << "runs inside the namespace of CommandsAreAppliedAndAnswered";
+  if (!inner("CommandsAreAppliedAndAnswered"))
+    GTEST_SKIP() << "runs inside the namespace of CommandsAreAppliedAndAnswered";
   const fs::path dir = fs::temp_directory_path() / ("svslam_lcmcmd_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const pid_t run = spawn(std::string(SVSLAM_CLI) +
                           " run --source synthetic:width=320,height=240,frames=2000 --rate 20"
-                          " --lcm-url '" + kUrl + "' --out " + (dir / "out").string() + " > " +
+                          " --lcm-url '" +
+                          kUrl + "' --out " + (dir / "out").string() + " > " +
                           (dir / "run_out.txt").string() + " 2>&1");
   LcmParams p;
   p.url = kUrl;
@@ -190,7 +233,9 @@ TEST(LcmPipeline, InnerCommandsAreAppliedAndAnswered) {
   fs::remove_all(dir);
 }
 
-TEST(LcmPipeline, CommandsAreAppliedAndAnswered) { runInNamespace("CommandsAreAppliedAndAnswered"); }
+TEST(LcmPipeline, CommandsAreAppliedAndAnswered) {
+  runInNamespace("CommandsAreAppliedAndAnswered");
+}
 
 }  // namespace
 }  // namespace svslam::drivers

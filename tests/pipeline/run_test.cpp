@@ -55,8 +55,8 @@ TEST_F(Run, KittiOutputsAreCompleteAndDeterministic) {
   EXPECT_EQ(countLines(slurp(path("a/trajectory_kitti.txt"))), 6);
   EXPECT_EQ(countLines(slurp(path("a/trajectory_tum.txt"))), 6);
   const std::string stats = slurp(path("a/stats.json"));
-  for (const char* key : {"\"frames\": 6", "\"frames_without_pose\"", "\"stage_ms\"",
-                          "\"p50_ms\"", "\"p99_ms\"", "\"max_ms\"", "\"front_end\""})
+  for (const char* key : {"\"frames\": 6", "\"frames_without_pose\"", "\"stage_ms\"", "\"p50_ms\"",
+                          "\"p99_ms\"", "\"max_ms\"", "\"front_end\""})
     EXPECT_NE(stats.find(key), std::string::npos) << key << " missing in " << stats;
   // The first pose is the identity (KITTI convention).
   auto t = svslam::drivers::readTrajectory(path("a/trajectory_kitti.txt"));
@@ -75,6 +75,10 @@ TEST_F(Run, BadInputGivesAClearErrorAndNonZeroExit) {
   EXPECT_NE(err.find("stereo_match.min_zncc"), std::string::npos) << err;
   EXPECT_NE(run("--config " + path("missing.yaml"), &err), 0);
   EXPECT_NE(err.find("missing.yaml"), std::string::npos) << err;
+  // A folder is not a configuration file (it used to run with the defaults).
+  fs::create_directories(path("conf.d"));
+  EXPECT_NE(run("--config " + path("conf.d") + " --source nowhere:x", &err), 0);
+  EXPECT_NE(err.find(path("conf.d") + "' is a directory"), std::string::npos) << err;
   EXPECT_NE(run("--max-frames -3", &err), 0);
   EXPECT_NE(err.find("max-frames"), std::string::npos) << err;
 }
@@ -92,8 +96,10 @@ TEST_F(Run, CorruptFrameKeepsWhatWasWritten) {
   std::sort(left.begin(), left.end());
   std::sort(right.begin(), right.end());
   for (int i = 0; i < 5; ++i) {
-    fs::copy_file(left[static_cast<std::size_t>(i)], seq / "image_l" / left[static_cast<std::size_t>(i)].filename());
-    fs::copy_file(right[static_cast<std::size_t>(i)], seq / "image_r" / right[static_cast<std::size_t>(i)].filename());
+    fs::copy_file(left[static_cast<std::size_t>(i)],
+                  seq / "image_l" / left[static_cast<std::size_t>(i)].filename());
+    fs::copy_file(right[static_cast<std::size_t>(i)],
+                  seq / "image_r" / right[static_cast<std::size_t>(i)].filename());
   }
   fs::resize_file(seq / "image_l" / left[3].filename(), 100);
   std::string err;
@@ -101,4 +107,55 @@ TEST_F(Run, CorruptFrameKeepsWhatWasWritten) {
   EXPECT_NE(err.find(left[3].filename().string()), std::string::npos) << err;
   EXPECT_EQ(countLines(slurp(path("o/trajectory_kitti.txt"))), 3);  // frames 0..2 kept
   EXPECT_NE(slurp(path("o/stats.json")).find("\"error\""), std::string::npos);
+}
+
+TEST_F(Run, ReusedOutputFolderHoldsOnlyThisRunsFiles) {
+  // An earlier run's files in the folder: those this run would write are removed at its start
+  // (a vo run without the map writes no covariance, landmarks or map files); others stay.
+  fs::create_directories(path("o"));
+  for (const char* f :
+       {"trajectory_kitti.txt", "pose_covariance.txt", "landmarks.ply", "stats.json",
+        "stats.json.tmp", "dem.tif", "ortho.png", "groundtruth_dem.tif"})
+    std::ofstream(path("o/") + f) << "stale\nstale\nstale\nstale\nstale\n";
+  std::ofstream(path("o/notes.txt")) << "mine\n";
+  std::ofstream(path("c.yaml")) << "dense_stereo: {enabled: false}\nmap: {enabled: false}\n";
+  std::string err;
+  ASSERT_EQ(run("--source synthetic:width=320,height=240,frames=3 --mode vo --config " +
+                    path("c.yaml") + " --out " + path("o"),
+                &err),
+            0)
+      << err;
+  EXPECT_EQ(countLines(slurp(path("o/trajectory_kitti.txt"))), 3);
+  EXPECT_NE(slurp(path("o/stats.json")).find("\"frames\": 3,"), std::string::npos);
+  for (const char* f : {"pose_covariance.txt", "landmarks.ply", "stats.json.tmp", "dem.tif",
+                        "ortho.png", "groundtruth_dem.tif"})
+    EXPECT_FALSE(fs::exists(path("o/") + f)) << f << " of the earlier run is still there";
+  EXPECT_EQ(slurp(path("o/notes.txt")), "mine\n");
+}
+
+TEST_F(Run, KittiFrameWithOneSideMissingIsSkippedAndCounted) {
+  if (!haveKitti()) GTEST_SKIP() << "no KITTI data at " << kKitti;
+  // The first 4 frames, the right image of frame 2 missing.
+  const fs::path seq = dir_ / "seq";
+  fs::create_directories(seq / "image_l");
+  fs::create_directories(seq / "image_r");
+  fs::copy_file(kKitti + "/calib.txt", seq / "calib.txt");
+  for (int i = 0; i < 4; ++i) {
+    const std::string name = "00000" + std::to_string(i) + ".png";
+    fs::copy_file(kKitti + "/image_l/" + name, seq / "image_l" / name);
+    if (i != 2) fs::copy_file(kKitti + "/image_r/" + name, seq / "image_r" / name);
+  }
+  std::ofstream(path("c.yaml")) << "dense_stereo: {enabled: false}\nmap: {enabled: false}\n";
+  std::string err;
+  ASSERT_EQ(
+      run("--source kitti:" + seq.string() + " --config " + path("c.yaml") + " --out " + path("o"),
+          &err),
+      0)
+      << err;
+  EXPECT_NE(err.find("1 frame(s) of the source skipped: 000002 (no right image)"),
+            std::string::npos)
+      << err;
+  EXPECT_EQ(countLines(slurp(path("o/trajectory_kitti.txt"))), 3);
+  const std::string stats = slurp(path("o/stats.json"));
+  EXPECT_NE(stats.find("\"source_frames_skipped\": 1,"), std::string::npos) << stats;
 }

@@ -185,8 +185,26 @@ TEST_F(StopSignal, SigintIsHandledToo) {
   EXPECT_EQ(stopSignalNumber(), SIGINT);
 }
 
+TEST_F(StopSignal, SighupIsHandledToo) {
+  ASSERT_EQ(raise(SIGHUP), 0);
+  EXPECT_TRUE(stopRequested());
+  EXPECT_EQ(stopSignalNumber(), SIGHUP);
+}
+
+TEST_F(StopSignal, ASignalPendingWhileBlockedIsHandledAtInstall) {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGTERM);
+  ASSERT_EQ(pthread_sigmask(SIG_BLOCK, &set, nullptr), 0);
+  ASSERT_EQ(raise(SIGTERM), 0);  // pending (e.g. sent before svslam run got going)
+  EXPECT_FALSE(stopRequested());
+  ASSERT_TRUE(installStopSignalHandlers());  // unblocks: handled now
+  EXPECT_TRUE(stopRequested());
+  EXPECT_EQ(stopSignalNumber(), SIGTERM);
+}
+
 TEST_F(StopSignal, HandlersDoNotRestartSystemCalls) {
-  for (const int sig : {SIGTERM, SIGINT}) {
+  for (const int sig : {SIGTERM, SIGINT, SIGHUP}) {
     struct sigaction sa {};
     ASSERT_EQ(sigaction(sig, nullptr, &sa), 0);
     EXPECT_EQ(sa.sa_flags & SA_RESTART, 0) << "signal " << sig;

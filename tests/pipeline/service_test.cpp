@@ -1,8 +1,11 @@
 // `svslam run` as a systemd service, without systemd: a unix datagram socket stands in for
 // NOTIFY_SOCKET and receives READY=1 (after the first pose), WATCHDOG=1 (from the pipeline's
 // health check while frames complete) and STOPPING=1; SIGTERM mid-run stops capture, drains,
-// writes every output whole and exits 0.
+// writes every output whole and exits 0; so does a stop signal during --preload, while an lcm:
+// source waits for its first frame, at the very start, and SIGHUP.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <pthread.h>
 #include <signal.h>
 #include <sys/socket.h>
 #include <sys/un.h>
@@ -16,6 +19,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "cli_helpers.hpp"
 
@@ -50,16 +54,37 @@ class Service : public ::testing::Test {
     ::close(fd_);
     fs::remove_all(dir_);
   }
-  // Starts svslam run with the notify environment; returns its pid.
-  pid_t start(const std::string& args) {
+  // Starts svslam run with the notify environment; returns its pid. With block_stop_signals
+  // it starts with SIGTERM, SIGINT and SIGHUP blocked (pending until svslam unblocks them),
+  // executed directly (no shell, which would reset the mask; `args` then has no quotes).
+  pid_t start(const std::string& args, bool block_stop_signals = false) {
+    // Blocked before fork (the child inherits the mask): a signal sent right after start()
+    // returns cannot hit the child before its mask is set.
+    sigset_t set, old;
+    sigemptyset(&set);
+    for (int sig : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&set, sig);
+    if (block_stop_signals) ::pthread_sigmask(SIG_BLOCK, &set, &old);
     const pid_t pid = ::fork();
+    if (pid != 0 && block_stop_signals) ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
     if (pid == 0) {
       ::setenv("NOTIFY_SOCKET", sock_path_.c_str(), 1);
       ::setenv("WATCHDOG_USEC", "400000", 1);  // ping every 200 ms while frames complete
       ::setenv("WATCHDOG_PID", std::to_string(::getpid()).c_str(), 1);
+      const std::string out = (dir_ / "stdout.txt").string(), err = (dir_ / "stderr.txt").string();
+      if (block_stop_signals) {
+        std::vector<std::string> words{SVSLAM_CLI, "run"};
+        std::istringstream ss(args + " --out " + (dir_ / "out").string());
+        for (std::string w; ss >> w;) words.push_back(w);
+        std::vector<char*> argv;
+        for (auto& w : words) argv.push_back(w.data());
+        argv.push_back(nullptr);
+        ::dup2(::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644), 1);
+        ::dup2(::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644), 2);
+        ::execv(SVSLAM_CLI, argv.data());
+        ::_exit(127);
+      }
       const std::string cmd = std::string("exec ") + SVSLAM_CLI + " run " + args + " --out " +
-                              (dir_ / "out").string() + " > " + (dir_ / "stdout.txt").string() +
-                              " 2> " + (dir_ / "stderr.txt").string();
+                              (dir_ / "out").string() + " > " + out + " 2> " + err;
       ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
       ::_exit(127);
     }
@@ -99,6 +124,29 @@ int waitExit(pid_t pid) {
   int st = 0;
   ::waitpid(pid, &st, 0);
   return svslam::test::exitCode(st);
+}
+
+// The exit code of `pid`, or -1 (after SIGKILL) when it has not ended within `timeout`.
+int waitExitWithin(pid_t pid, std::chrono::seconds timeout) {
+  const auto t0 = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - t0 < timeout) {
+    int st = 0;
+    if (::waitpid(pid, &st, WNOHANG) == pid) return svslam::test::exitCode(st);
+    std::this_thread::sleep_for(20ms);
+  }
+  ::kill(pid, SIGKILL);
+  waitExit(pid);
+  return -1;
+}
+
+// True once `file` contains `text` (polled up to `timeout`).
+bool waitForText(const fs::path& file, const std::string& text, std::chrono::seconds timeout) {
+  const auto t0 = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - t0 < timeout) {
+    if (slurp(file).find(text) != std::string::npos) return true;
+    std::this_thread::sleep_for(20ms);
+  }
+  return false;
 }
 
 TEST_F(Service, ReadyWatchdogAndCleanStopOnSigterm) {
@@ -160,6 +208,80 @@ TEST_F(Service, NoWatchdogPingWithoutProgress) {
   EXPECT_EQ(all.find("READY=1"), std::string::npos) << all;
   EXPECT_EQ(all.find("WATCHDOG=1"), std::string::npos) << all;
   EXPECT_NE(slurp(dir_ / "stderr.txt").find("/nonexistent/folder"), std::string::npos);
+}
+
+// A stop signal at any moment of `svslam run` ends it in order: exit 0, stats.json written.
+class StopSignal : public Service {
+ protected:
+  void SetUp() override {
+    Service::SetUp();
+    config_ = (dir_ / "c.yaml").string();
+    std::ofstream(config_) << "dense_stereo: {enabled: false}\nmap: {enabled: false}\n";
+  }
+  // The run ended with exit 0 and whole outputs.
+  void expectWholeOutputs(int rc) {
+    const std::string err = slurp(dir_ / "stderr.txt");
+    EXPECT_EQ(rc, 0) << err;
+    const std::string stats = slurp(dir_ / "out" / "stats.json");
+    EXPECT_NE(stats.find("\"frames\": "), std::string::npos) << stats << err;
+    EXPECT_FALSE(stats.empty() || stats.back() != '\n') << stats;
+    EXPECT_TRUE(fs::exists(dir_ / "out" / "trajectory_kitti.txt"));
+    EXPECT_NE(slurp(dir_ / "stdout.txt").find("\"stopped_by_signal\": true"), std::string::npos)
+        << slurp(dir_ / "stdout.txt");
+  }
+  std::string config_;
+};
+
+TEST_F(StopSignal, SigtermDuringPreload) {
+  const pid_t pid =
+      start("--source synthetic:width=320,height=240,frames=5000 --preload --config " + config_);
+  ASSERT_TRUE(waitForText(dir_ / "stderr.txt", "reading the sequence into memory", 30s))
+      << slurp(dir_ / "stderr.txt");
+  std::this_thread::sleep_for(200ms);
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  expectWholeOutputs(waitExitWithin(pid, 60s));
+}
+
+TEST_F(StopSignal, SigtermWhileAnLcmSourceWaitsForItsFirstFrame) {
+  const pid_t pid =
+      start("--source 'lcm:NOBODY_SENDS?timeout_s=120&url=memq://' --config " + config_);
+  std::this_thread::sleep_for(1s);
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  const int rc = waitExitWithin(pid, 20s);
+  expectWholeOutputs(rc);
+  EXPECT_NE(slurp(dir_ / "out" / "stats.json").find("\"frames\": 0,"), std::string::npos);
+  EXPECT_NE(slurp(dir_ / "stderr.txt").find("stopped before the first frame"), std::string::npos)
+      << slurp(dir_ / "stderr.txt");
+}
+
+TEST_F(StopSignal, SigtermAtTheVeryStart) {
+  // Sent before svslam has even started: it is pending until the handlers are installed.
+  const pid_t pid =
+      start("--source synthetic:width=320,height=240,frames=30 --config " + config_, true);
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  expectWholeOutputs(waitExitWithin(pid, 60s));
+  EXPECT_NE(slurp(dir_ / "stderr.txt").find("stop requested (signal 15)"), std::string::npos);
+}
+
+TEST_F(StopSignal, SighupMidRun) {
+  const pid_t pid =
+      start("--source synthetic:width=320,height=240,frames=2000 --rate 20 --config " + config_);
+  ASSERT_NE(readUntil("READY=1", 60s).find("READY=1"), std::string::npos)
+      << slurp(dir_ / "stderr.txt");
+  ASSERT_EQ(::kill(pid, SIGHUP), 0);
+  int rc = -1;
+  for (int i = 0; i < 600 && rc == -1; ++i) {  // read the notifications as systemd would
+    int st = 0;
+    if (::waitpid(pid, &st, WNOHANG) == pid) rc = svslam::test::exitCode(st);
+    drain();
+    std::this_thread::sleep_for(100ms);
+  }
+  if (rc == -1) {
+    ::kill(pid, SIGKILL);
+    waitExit(pid);
+  }
+  expectWholeOutputs(rc);
+  EXPECT_NE(slurp(dir_ / "stderr.txt").find("stop requested (signal 1)"), std::string::npos);
 }
 
 }  // namespace

@@ -281,6 +281,12 @@ TEST(DenseStereo, RejectsBadParametersAndInputs) {
          q.census_h = 9;
        }},
       {"census_w 4", [](DenseStereoParams& q) { q.census_w = 4; }},
+      {"census 1x63: a side below 3",
+       [](DenseStereoParams& q) {
+         q.census_w = 1;
+         q.census_h = 63;
+       }},
+      {"census 7x1", [](DenseStereoParams& q) { q.census_h = 1; }},
       {"window_w 33", [](DenseStereoParams& q) { q.window_w = 33; }},
       {"SAD 17x17 unfiltered: 289 * 255 overflows 16 bits",
        [](DenseStereoParams& q) {

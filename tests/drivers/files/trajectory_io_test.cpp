@@ -62,6 +62,27 @@ TEST_F(TrajectoryIo, ErrorsNameFileAndLine) {
   EXPECT_FALSE(zero_q.isOk());
 }
 
+TEST_F(TrajectoryIo, RotationsMustBeRotations) {
+  // Rounded to 7 digits: accepted (projected onto a rotation).
+  auto rounded =
+      readTrajectory(write("r.txt", "0.7071068 -0.7071068 0 0 0.7071068 0.7071068 0 0 0 0 1 0\n"));
+  ASSERT_TRUE(rounded.isOk()) << rounded.status().message();
+  auto expectError = [&](const std::string& name, const std::string& text,
+                         const std::string& needle) {
+    auto r = readTrajectory(write(name, text));
+    ASSERT_FALSE(r.isOk()) << name;
+    EXPECT_NE(r.status().message().find(needle), std::string::npos) << r.status().message();
+  };
+  expectError("scaled.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n2 0 0 0 0 2 0 0 0 0 2 0\n",
+              "scaled.txt:2: the 3x3 part is not a rotation");
+  expectError("sheared.txt", "1 0.1 0 0 0 1 0 0 0 0 1 0\n", "sheared.txt:1: the 3x3 part");
+  expectError("mirror.txt", "-1 0 0 0 0 1 0 0 0 0 1 0\n", "det = -1");
+  expectError("q.txt", "1 0 0 0 0 0 0 1\n2 0 0 0 0 0 0 2\n",
+              "q.txt:2: the quaternion is not a unit one (norm 2)");
+  expectError("t.txt", "1e30 0 0 0 0 0 0 1\n", "t.txt:1: time stamp");
+  expectError("t2.txt", "1e11 0 0 0 0 0 0 1\n", "out of range");
+}
+
 TEST_F(TrajectoryIo, AssociatesByIndexOrStamp) {
   TrajectoryFile a, b;
   for (int i = 0; i < 5; ++i) {

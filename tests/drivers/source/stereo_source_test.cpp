@@ -1,8 +1,10 @@
 // Stereo sources on the real sequences of ../shared/data: KITTI calibration and timing, EuRoC
-// rectification (matched features land on the same row), and clear errors for bad folders.
+// rectification (matched features land on the same row), and clear errors for bad folders; on
+// small generated KITTI folders: pairing by name, calib.txt and times.txt errors.
 #include "drivers/source/stereo_source.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -111,6 +113,112 @@ TEST(StereoSource, BadFoldersGiveClearErrors) {
   ASSERT_FALSE(s.isOk());
   EXPECT_NE(s.status().message().find("calib.txt"), std::string::npos) << s.status().message();
   fs::remove_all(dir);
+}
+
+// A small KITTI folder in a fresh temporary directory: 32x24 images filled with 20 * i (left)
+// and 20 * i + 1 (right) for the frame names given, calib.txt and optional times.txt.
+class KittiFolder : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("svslam_kitti_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "image_l");
+    fs::create_directories(dir_ / "image_r");
+    calib(kCalibP0, kCalibP1);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  static constexpr const char* kCalibP0 = "P0: 700 0 300 0 0 700 180 0 0 0 1 0";
+  static constexpr const char* kCalibP1 = "P1: 700 0 300 -350 0 700 180 0 0 0 1 0";
+  void image(const std::string& side, int i, const std::string& name = "") {
+    const cv::Mat m(24, 32, CV_8U, cv::Scalar(20 * i + (side == "image_r" ? 1 : 0)));
+    char buf[16];
+    std::snprintf(buf, sizeof buf, "%06d.png", i);
+    ASSERT_TRUE(cv::imwrite((dir_ / side / (name.empty() ? buf : name)).string(), m));
+  }
+  void calib(const std::string& p0, const std::string& p1) {
+    std::ofstream(dir_ / "calib.txt") << p0 << "\n" << p1 << "\n";
+  }
+  std::string openError() {
+    auto s = openKittiSource(dir_.string());
+    return s.isOk() ? "(opened)" : s.status().message();
+  }
+  fs::path dir_;
+};
+
+TEST_F(KittiFolder, PairsImagesByNameAndSkipsFramesWithOneSideMissing) {
+  for (int i : {0, 1, 2, 4, 5}) image("image_l", i);  // left 000003 missing
+  for (int i : {0, 1, 2, 3, 5}) image("image_r", i);  // right 000004 missing
+  image("image_l", 9, ".hidden.png");                 // not an image of the sequence
+  image("image_r", 9, ".000003.png");
+  std::ofstream(dir_ / "times.txt") << "0.0\n0.1\n0.2\n0.3\n0.4\n0.5\n";
+  auto src = openKittiSource(dir_.string());
+  ASSERT_TRUE(src.isOk()) << src.status().message();
+  EXPECT_EQ((*src)->size(), 4);
+  EXPECT_EQ((*src)->skippedFrames(), 2);
+  const std::string detail = (*src)->skippedFramesDetail();
+  EXPECT_NE(detail.find("000003"), std::string::npos) << detail;
+  EXPECT_NE(detail.find("000004"), std::string::npos) << detail;
+  const int expected[] = {0, 1, 2, 5};
+  StereoFrame f;
+  for (int k = 0; k < 4; ++k) {
+    auto more = (*src)->next(f);
+    ASSERT_TRUE(more.isOk() && *more) << k;
+    EXPECT_EQ(f.index, k);
+    EXPECT_EQ(f.left(0, 0), 20 * expected[k]) << "frame " << k;
+    EXPECT_EQ(f.right(0, 0), 20 * expected[k] + 1) << "frame " << k << ": left and right differ";
+    EXPECT_EQ(f.t_ns, expected[k] * 100 * kNsPerMs);  // the stamp of its own name
+  }
+  auto end = (*src)->next(f);
+  ASSERT_TRUE(end.isOk());
+  EXPECT_FALSE(*end);
+}
+
+TEST_F(KittiFolder, CalibrationErrorsSayWhatIsWrong) {
+  image("image_l", 0);
+  image("image_r", 0);
+  ASSERT_EQ(openError(), "(opened)");
+  calib("P0: 700 0 300 0 0 700 nan 0 0 0 1 0", kCalibP1);
+  EXPECT_NE(openError().find("'nan' is not finite"), std::string::npos) << openError();
+  calib("P0: 700 0 300 0 0 700 180 0 0 0 1 0", "P1: 700 0 inf -350 0 700 180 0 0 0 1 0");
+  EXPECT_NE(openError().find("'inf' is not finite"), std::string::npos) << openError();
+  calib("P0: 700 0 300 0 0 700 1e400 0 0 0 1 0", kCalibP1);
+  EXPECT_NE(openError().find("'1e400' is not finite"), std::string::npos) << openError();
+  calib("P0: 0 0 300 0 0 700 180 0 0 0 1 0", "P1: 0 0 300 -350 0 700 180 0 0 0 1 0");
+  EXPECT_NE(openError().find("fx (its 1st number) must be positive"), std::string::npos)
+      << openError();
+  calib("P0: 1e308 0 300 0 0 1e308 180 0 0 0 1 0", "P1: 1e308 0 300 -1e308 0 1e308 180 0 0 0 1 0");
+  EXPECT_NE(openError().find("f_px = 1e+308 is out of range"), std::string::npos) << openError();
+  calib(kCalibP0, "P1: 700 0 310 -350 0 700 180 0 0 0 1 0");
+  EXPECT_NE(openError().find("P1 cx = 310 differs from P0's 300"), std::string::npos)
+      << openError();
+  calib(kCalibP0, "P1: 700 0 300 -350");
+  EXPECT_NE(openError().find("needs 12 numbers, got 4"), std::string::npos) << openError();
+}
+
+TEST_F(KittiFolder, TimeStampsMustFitAndIncrease) {
+  for (int i = 0; i < 3; ++i) {
+    image("image_l", i);
+    image("image_r", i);
+  }
+  std::ofstream(dir_ / "times.txt") << "0.0\n0.1\n1e20\n";
+  EXPECT_NE(openError().find("times.txt:3: time stamp"), std::string::npos) << openError();
+  EXPECT_NE(openError().find("out of range"), std::string::npos) << openError();
+  std::ofstream(dir_ / "times.txt") << "0.0\n0.2\n0.1\n";
+  EXPECT_NE(openError().find("times.txt:3"), std::string::npos) << openError();
+  EXPECT_NE(openError().find("not after the previous one"), std::string::npos) << openError();
+  std::ofstream(dir_ / "times.txt") << "0.0\n0.1\nabc\n";
+  EXPECT_NE(openError().find("times.txt:3: 'abc' is not a number"), std::string::npos)
+      << openError();
+  std::ofstream(dir_ / "times.txt") << "0.0\n0.1\n0.2\n";
+  EXPECT_EQ(openError(), "(opened)");
+}
+
+TEST(StereoSource, UnknownSourceListsEveryKind) {
+  auto s = openStereoSource("video:/x");
+  ASSERT_FALSE(s.isOk());
+  for (const char* kind : {"kitti:", "euroc:", "synthetic", "v4l2:", "libcamera:", "lcm:"})
+    EXPECT_NE(s.status().message().find(kind), std::string::npos)
+        << kind << ": " << s.status().message();
 }
 
 }  // namespace

@@ -321,6 +321,9 @@ TEST(SyntheticFlight, OptionErrorsNameTheKey) {
   expectError("altitude_min_m=50", "altitude_min_m");
   expectError("hfov_deg=", "hfov_deg");
   expectError("noequals", "noequals");
+  // A key given twice is an error naming it (not first or last wins).
+  expectError("frames=3,width=64,frames=5", "'frames' is given twice");
+  expectError("variant=blimp,variant=rover", "'variant' is given twice");
   auto ok = openStereoSource("synthetic:frames=3,width=64,height=48,seed=18446744073709551615");
   ASSERT_TRUE(ok.isOk()) << ok.status().message();
   EXPECT_EQ((*ok)->size(), 3);
