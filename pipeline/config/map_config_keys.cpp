@@ -96,8 +96,11 @@ ConfigSection mapConfigSection() {
       number("gate_chi2", SVSLAM_FIELD(dem.gate_chi2), 1e-6, 1e6, "",
              "Mahalanobis gate (chi-square 1 dof) of a point's height against its cell; "
              "beyond, the point's variance is inflated onto the gate"),
-      number("max_height_above_camera_m", SVSLAM_FIELD(dem.max_height_above_camera_m), -1e6,
-             1e6, "m",
+      number("reject_variance_factor", SVSLAM_FIELD(dem.reject_variance_factor), 1, 1e3, "",
+             "a cell whose estimate most of a frame's points reject has its variance "
+             "multiplied by this before the frame is fused (moved objects fade; 1 = off)"),
+      number("max_height_above_camera_m", SVSLAM_FIELD(dem.max_height_above_camera_m), -1e6, 1e6,
+             "m",
              "points higher than this above the camera centre are not fused (a car: 0.5, "
              "below street lamps and branches)"),
       number("min_sigma_m", SVSLAM_FIELD(dem.min_sigma_m), 0, 100, "m",

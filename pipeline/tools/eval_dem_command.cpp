@@ -64,6 +64,10 @@ int runPathMode(const ArgParser& p, const map::DemRaster& dem) {
   if (Status st = parseVector3("gravity", p.get("gravity"), g); !st) return fail(st);
   auto half_width = p.getDouble("half-width-m");
   if (!half_width) return fail(half_width.status());
+  auto band = p.getDouble("surface-band-m");
+  if (!band) return fail(band.status());
+  if (!std::isfinite(*band) || *band < 0)
+    return fail(Status::invalidArgument("--surface-band-m must be finite and >= 0"));
   auto min_ahead = p.getDouble("min-ahead-m");
   if (!min_ahead) return fail(min_ahead.status());
   if (!std::isfinite(*min_ahead) || *min_ahead < 0)
@@ -78,7 +82,7 @@ int runPathMode(const ArgParser& p, const map::DemRaster& dem) {
   path_map.reserve(traj->poses.size());
   for (const Eigen::Isometry3d& T_world_cam : traj->poses)
     path_map.push_back(R_map_world * T_world_cam.translation());
-  auto s = scorePathStrip(dem, dropPathStart(path_map, *min_ahead), *half_width);
+  auto s = scorePathStrip(dem, dropPathStart(path_map, *min_ahead), *half_width, *band);
   if (!s) return fail(s.status());
   JsonObject j;
   j.add("strip_cells", s->strip_cells)
@@ -88,7 +92,11 @@ int runPathMode(const ArgParser& p, const map::DemRaster& dem) {
       .add("plane_residual_std_m", s->plane_residual_std_m, 4)
       .add("plane_residual_p95_abs_m", s->plane_residual_p95_abs_m, 4)
       .add("median_sigma_m", s->median_sigma_m, 4)
-      .add("camera_height_above_plane_m", s->camera_height_above_plane_m, 4);
+      .add("camera_height_above_plane_m", s->camera_height_above_plane_m, 4)
+      .add("surface_band_m", *band, 3)
+      .add("surface_cells", s->surface_cells)
+      .add("off_surface_cells", s->off_surface_cells)
+      .add("surface_residual_std_m", s->surface_residual_std_m, 4);
   std::printf("%s\n", j.str().c_str());
   return 0;
 }
@@ -109,7 +117,10 @@ int runEvalDem(const std::vector<std::string>& args) {
               "within --half-width-m (horizontal) of the camera path projected on the map plane:\n"
               "strip_cells, path_length_m, height_std_m, plane_residual_std_m and\n"
               "plane_residual_p95_abs_m (residuals of a least-squares plane z = a x + b y + c),\n"
-              "median_sigma_m, camera_height_above_plane_m (mean over the path), metres.\n"
+              "median_sigma_m, camera_height_above_plane_m (mean over the path), metres;\n"
+              "the road surface: surface_cells within --surface-band-m of that plane (what\n"
+              "stands on the road is not road: off_surface_cells), surface_residual_std_m (RMS\n"
+              "of their residuals to a plane refitted to them).\n"
               "Figures over an empty set are null.");
   p.addOption("dem", "FILE", "estimated DEM (GeoTIFF: height_m, sigma_m, count)", std::nullopt,
               true);
@@ -125,6 +136,10 @@ int runEvalDem(const std::vector<std::string>& args) {
               "0,0,1");
   p.addOption("half-width-m", "M", "path mode: half-width of the strip, m", "1.0");
   p.addOption("min-ahead-m", "M", "path mode: drop the first M metres of the path", "0");
+  p.addOption("surface-band-m", "M",
+              "path mode: cells within M of the strip's plane are road surface (0: no surface "
+              "figures)",
+              "0.3");
   if (auto code = parseCommandLine(p, args)) return *code;
   auto fail = [](const Status& s) { return reportFailure("eval-dem", s); };
   const bool has_gt = p.has("gt"), has_path = p.has("path");

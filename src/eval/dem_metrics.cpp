@@ -117,10 +117,53 @@ Result<DemScore> scoreDem(const map::DemRaster& est, const map::DemRaster& gt) {
   return s;
 }
 
+namespace {
+
+// Least-squares plane z = a x + b y + c over the points q with (*use)[q] (all when use is null),
+// centred for conditioning. False when fewer than 3 points or all on one line.
+bool fitPlane(const std::vector<double>& x, const std::vector<double>& y,
+              const std::vector<double>& z, const std::vector<char>* use, double& a, double& b,
+              double& c) {
+  double mx = 0, my = 0, mz = 0;
+  std::size_t n = 0;
+  for (std::size_t q = 0; q < x.size(); ++q) {
+    if (use && !(*use)[q]) continue;
+    mx += x[q];
+    my += y[q];
+    mz += z[q];
+    ++n;
+  }
+  if (n < 3) return false;
+  mx /= static_cast<double>(n);
+  my /= static_cast<double>(n);
+  mz /= static_cast<double>(n);
+  double sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0;
+  for (std::size_t q = 0; q < x.size(); ++q) {
+    if (use && !(*use)[q]) continue;
+    const double dx = x[q] - mx, dy = y[q] - my, dz = z[q] - mz;
+    sxx += dx * dx;
+    sxy += dx * dy;
+    syy += dy * dy;
+    sxz += dx * dz;
+    syz += dy * dz;
+  }
+  // Normal equations of the centred fit dz = a dx + b dy; singular when the centres are on a line.
+  const double det = sxx * syy - sxy * sxy;
+  if (!(det > 1e-12 * (sxx + syy) * (sxx + syy))) return false;  // scale-free test
+  a = (syy * sxz - sxy * syz) / det;
+  b = (sxx * syz - sxy * sxz) / det;
+  c = mz - a * mx - b * my;
+  return true;
+}
+
+}  // namespace
+
 Result<PathStripScore> scorePathStrip(const map::DemRaster& dem,
                                       const std::vector<Eigen::Vector3d>& path_map,
-                                      double half_width_m) {
+                                      double half_width_m, double surface_band_m) {
   if (Status s = map::checkDemRaster(dem, "DEM"); !s) return s;
+  if (std::isnan(surface_band_m))
+    return Status::invalidArgument("surface band must not be NaN (<= 0: no surface figures)");
   if (!std::isfinite(half_width_m) || half_width_m <= 0)
     return Status::invalidArgument("path strip half-width must be finite and > 0, got " +
                                    std::to_string(half_width_m) + " m");
@@ -134,10 +177,10 @@ Result<PathStripScore> scorePathStrip(const map::DemRaster& dem,
   s.strip_cells = static_cast<std::int64_t>(cells.size());
   if (cells.empty()) return s;
 
-  // Cell centres (x, y) and heights, m; means for a centred (well-conditioned) fit.
+  // Cell centres (x, y) and heights, m.
   const std::size_t n = cells.size();
   std::vector<double> x(n), y(n), z(n), sigma;
-  double mx = 0, my = 0, mz = 0;
+  double mz = 0;
   for (std::size_t q = 0; q < n; ++q) {
     const auto c = static_cast<int>(cells[q] % static_cast<std::size_t>(dem.cols));
     const auto r = static_cast<int>(cells[q] / static_cast<std::size_t>(dem.cols));
@@ -145,32 +188,15 @@ Result<PathStripScore> scorePathStrip(const map::DemRaster& dem,
     y[q] = (dem.j0 + dem.rows - 1 - r + 0.5) * dem.cell_m;
     z[q] = dem.height_m[cells[q]];
     if (std::isfinite(dem.sigma_m[cells[q]])) sigma.push_back(dem.sigma_m[cells[q]]);
-    mx += x[q];
-    my += y[q];
     mz += z[q];
   }
-  mx /= n;
-  my /= n;
-  mz /= n;
-  double sxx = 0, sxy = 0, syy = 0, sxz = 0, syz = 0, szz = 0;
-  for (std::size_t q = 0; q < n; ++q) {
-    const double dx = x[q] - mx, dy = y[q] - my, dz = z[q] - mz;
-    sxx += dx * dx;
-    sxy += dx * dy;
-    syy += dy * dy;
-    sxz += dx * dz;
-    syz += dy * dz;
-    szz += dz * dz;
-  }
+  mz /= static_cast<double>(n);
+  double szz = 0;
+  for (std::size_t q = 0; q < n; ++q) szz += (z[q] - mz) * (z[q] - mz);
   s.height_std_m = std::sqrt(szz / n);
   if (!sigma.empty()) s.median_sigma_m = median(sigma);
 
-  // Normal equations of the centred fit dz = a dx + b dy; singular when the centres are on a line.
-  const double det = sxx * syy - sxy * sxy;
-  if (n < 3 || !(det > 1e-12 * (sxx + syy) * (sxx + syy))) return s;  // scale-free test
-  s.plane_a = (syy * sxz - sxy * syz) / det;
-  s.plane_b = (sxx * syz - sxy * sxz) / det;
-  s.plane_c = mz - s.plane_a * mx - s.plane_b * my;
+  if (!fitPlane(x, y, z, nullptr, s.plane_a, s.plane_b, s.plane_c)) return s;
   std::vector<double> abs_r(n);
   double sum_r2 = 0;
   for (std::size_t q = 0; q < n; ++q) {
@@ -178,6 +204,7 @@ Result<PathStripScore> scorePathStrip(const map::DemRaster& dem,
     sum_r2 += r * r;
     abs_r[q] = std::abs(r);
   }
+  const std::vector<double> abs_r_ordered = abs_r;  // nth_element reorders abs_r
   s.plane_residual_std_m = std::sqrt(sum_r2 / n);
   const std::size_t rank = static_cast<std::size_t>(std::ceil(0.95 * n));  // 1-based, >= 1
   std::nth_element(abs_r.begin(), abs_r.begin() + (rank - 1), abs_r.end());
@@ -186,6 +213,23 @@ Result<PathStripScore> scorePathStrip(const map::DemRaster& dem,
   for (const Eigen::Vector3d& p : path_map)
     sum_h += p.z() - (s.plane_a * p.x() + s.plane_b * p.y() + s.plane_c);
   s.camera_height_above_plane_m = sum_h / static_cast<double>(path_map.size());
+
+  // The road surface: the cells within surface_band_m of the plane (what stands on the road, a
+  // car or a post, or a gross error, is not road), a plane refitted to them and their residuals.
+  if (!(surface_band_m > 0)) return s;
+  std::vector<char> keep(n);
+  for (std::size_t q = 0; q < n; ++q) keep[q] = abs_r_ordered[q] <= surface_band_m;
+  double a = 0, b = 0, c = 0;
+  if (!fitPlane(x, y, z, &keep, a, b, c)) return s;
+  double sum_s2 = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    if (!keep[q]) continue;
+    const double r = z[q] - (a * x[q] + b * y[q] + c);
+    sum_s2 += r * r;
+    ++s.surface_cells;
+  }
+  s.off_surface_cells = static_cast<std::int64_t>(n) - s.surface_cells;
+  s.surface_residual_std_m = std::sqrt(sum_s2 / static_cast<double>(s.surface_cells));
   return s;
 }
 

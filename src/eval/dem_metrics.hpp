@@ -50,14 +50,21 @@ struct PathStripScore {
   double median_sigma_m = NAN;  // median sigma band over the strip (finite ones), m
   // Mean over the path points of z - plane(x, y), m: the camera's height above the road.
   double camera_height_above_plane_m = NAN;
+  // The road surface: the strip's cells within surface_band_m of the plane (what stands on the
+  // road, a vehicle or a post, and gross errors are not road); a plane refitted to them and the
+  // RMS of their residuals, m. NaN / 0 when surface_band_m <= 0 or the cells fix no plane.
+  std::int64_t surface_cells = 0;
+  std::int64_t off_surface_cells = 0;  // strip cells farther than surface_band_m from the plane
+  double surface_residual_std_m = NAN;
 };
 
 // path_map: positions in the map frame (x, y horizontal, z up), m, in driving order.
-// Errors (invalidArgument): a malformed raster, half_width_m not finite or <= 0, a non-finite
-// path point. Cost: the cells of each segment's bounding box grown by half_width_m.
+// Errors (invalidArgument): a malformed raster, half_width_m not finite or <= 0, surface_band_m
+// NaN, a non-finite path point. Cost: the cells of each segment's bounding box grown by
+// half_width_m.
 Result<PathStripScore> scorePathStrip(const map::DemRaster& dem,
                                       const std::vector<Eigen::Vector3d>& path_map,
-                                      double half_width_m);
+                                      double half_width_m, double surface_band_m = 0.3);
 
 // The path without its first min_ahead_m metres of horizontal length: starts at the point of
 // the polyline at that arc length (interpolated, z too), then the later points. Empty when the

@@ -216,6 +216,7 @@ Status DemFuser::process(const DemFrame& in, DemMap& map, DemFuseStats& out) {
       if (r * r > gate * s) {  // sit on the gate: r^2 / (var' + rest) = gate
         var += r * r / gate - s;
         ++out.points_gated;
+        ++a.m.gated;
       }
     }
     const double w = 1.0 / var;
@@ -249,7 +250,8 @@ Status DemFuser::process(const DemFrame& in, DemMap& map, DemFuseStats& out) {
             out.points_no_tile += static_cast<int>(m.count);
             continue;
           }
-          DemMap::fuseCell(t->cells[static_cast<std::size_t>((j - tj * n) * n + (i - ti * n))], m);
+          DemMap::fuseCell(t->cells[static_cast<std::size_t>((j - tj * n) * n + (i - ti * n))], m,
+                           params_.reject_variance_factor);
           ++out.cells_updated;
           out.points_fused += static_cast<int>(m.count);
         }

@@ -112,12 +112,13 @@ bool DemMap::fuse(int i, int j, const CellMeasurement& m, std::int64_t seq, std:
   DemTile* t = tileForWrite(ti, tj);
   if (t == nullptr) return false;
   const int n = params_.tile_cells;
-  fuseCell(t->cells[static_cast<std::size_t>((j - tj * n) * n + (i - ti * n))], m);
+  fuseCell(t->cells[static_cast<std::size_t>((j - tj * n) * n + (i - ti * n))], m,
+           params_.reject_variance_factor);
   touch(*t, seq, t_ns);
   return true;
 }
 
-void DemMap::fuseCell(DemCell& c, const CellMeasurement& m) {
+void DemMap::fuseCell(DemCell& c, const CellMeasurement& m, double reject_variance_factor) {
   if (m.count == 0 || !(m.sum_w > 0.0)) return;
   if (c.count == 0) {
     c.height_m = static_cast<float>(m.sum_wh / m.sum_w);
@@ -128,7 +129,8 @@ void DemMap::fuseCell(DemCell& c, const CellMeasurement& m) {
         std::min<std::uint32_t>((256u * m.sum_luminance + m.count / 2) / m.count, 65535u));
     return;
   }
-  const double vi = decodeVariance(c.sigma_indep);
+  double vi = decodeVariance(c.sigma_indep);
+  if (2 * m.gated > m.count) vi *= reject_variance_factor;  // most of the frame rejects the cell
   const double w_old = vi > 0.0 ? 1.0 / vi : 0.0;
   const double w = w_old + m.sum_w;
   c.height_m = static_cast<float>((w_old * c.height_m + m.sum_wh) / w);

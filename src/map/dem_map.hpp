@@ -50,6 +50,8 @@ struct CellMeasurement {
   double sum_var_pose = 0.0;  // sum of the points' pose variance, m^2
   std::uint32_t count = 0;
   std::uint32_t sum_luminance = 0;  // grey levels
+  // Points of `count` that the Mahalanobis gate found inconsistent with the cell (DemFuser).
+  std::uint32_t gated = 0;
 };
 
 struct DemTile {
@@ -81,8 +83,10 @@ class DemMap {
 
   // The tile (ti, tj), created when missing; null when that would exceed params.max_tiles.
   DemTile* tileForWrite(int ti, int tj);
-  // Fuses one frame's measurement into a cell (nothing when it holds no point).
-  static void fuseCell(DemCell& c, const CellMeasurement& m);
+  // Fuses one frame's measurement into a cell (nothing when it holds no point). When most of
+  // the measurement's points were gated (2 gated > count), the cell's independent variance is
+  // first multiplied by reject_variance_factor (DemParams).
+  static void fuseCell(DemCell& c, const CellMeasurement& m, double reject_variance_factor);
   // Records that fusion number `seq` (frame time t_ns) wrote into `t`.
   static void touch(DemTile& t, std::int64_t seq, std::int64_t t_ns);
   // Tile of cell index i (floor division).

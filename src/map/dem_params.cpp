@@ -20,6 +20,8 @@ Status DemParams::validate() const {
   if (!(std::isfinite(min_disparity_px) && min_disparity_px > 0.0))
     return bad("min_disparity_px", "must be finite and > 0 px");
   if (!(gate_chi2 > 0.0 && gate_chi2 <= 1e6)) return bad("gate_chi2", "must be in (0, 1e6]");
+  if (!(reject_variance_factor >= 1.0 && reject_variance_factor <= 1e3))
+    return bad("reject_variance_factor", "must be in [1, 1e3]");
   if (!std::isfinite(max_height_above_camera_m))
     return bad("max_height_above_camera_m", "must be finite (m)");
   if (!(std::isfinite(min_sigma_m) && min_sigma_m >= 0.0))

@@ -211,6 +211,32 @@ TEST_F(PathStrip, PlaneResidualsAreTheNoiseAndTheSlopeIsInTheHeightStd) {
   EXPECT_NEAR(s->camera_height_above_plane_m, 1.40, 0.003);
 }
 
+// Things standing on the road (a car roof 1.5 m up on 30 cells, a hole 0.8 m deep on 5) drag the
+// plane's RMS; the surface figures leave them out and give back the road's own noise.
+TEST_F(PathStrip, SurfaceCellsLeaveOutWhatStandsOnTheRoad) {
+  int c = 0, r = 0;
+  for (int i = 20; i < 30; ++i)
+    for (int j = -1; j <= 1; ++j) {
+      ASSERT_TRUE(dem.cellToPixel(i, j, c, r));
+      dem.height_m[dem.index(c, r)] += 1.5f;
+    }
+  for (int i = 60; i < 65; ++i) {
+    ASSERT_TRUE(dem.cellToPixel(i, 2, c, r));
+    dem.height_m[dem.index(c, r)] -= 0.8f;
+  }
+  auto s = scorePathStrip(dem, path, 1.0, 0.3);
+  ASSERT_TRUE(s.isOk()) << s.status().message();
+  EXPECT_GT(s->plane_residual_std_m, 0.1);
+  EXPECT_EQ(s->off_surface_cells, 35);
+  EXPECT_EQ(s->surface_cells + s->off_surface_cells, s->strip_cells);
+  EXPECT_NEAR(s->surface_residual_std_m, 0.02, 0.001);
+  auto none = scorePathStrip(dem, path, 1.0, 0.0);  // no band: no surface figures
+  ASSERT_TRUE(none.isOk());
+  EXPECT_EQ(none->surface_cells, 0);
+  EXPECT_TRUE(std::isnan(none->surface_residual_std_m));
+  EXPECT_FALSE(scorePathStrip(dem, path, 1.0, NAN).isOk());
+}
+
 TEST_F(PathStrip, BoundingBoxesSelectTheSameCellsAsBruteForce) {
   path = {{-2.0, -1.0, 0.0}, {1.0, 2.5, 0.1}, {1.0, 2.5, 0.1}, {4.3, -0.7, 0.0}, {9.0, 4.0, 0.0}};
   for (const double w : {0.05, 0.5, 1.37}) {

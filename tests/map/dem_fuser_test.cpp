@@ -144,6 +144,35 @@ TEST(DemFuser, GatedOutliersWidenInsteadOfDragging) {
   EXPECT_LT(std::fabs(h1 - h0), 0.05);
 }
 
+// An object that was in view and moved away (a car ahead): 3 frames see it 5 m above the
+// ground, then only the ground is seen. Each later frame rejects the cell's estimate, so its
+// variance is raised by reject_variance_factor and the ground takes the cell over within a few
+// frames; without it (factor 1) the gated ground points only nudge it.
+TEST(DemFuser, AMovedObjectFadesFromTheMap) {
+  auto heightAfter = [](double factor, int ground_frames) {
+    DemParams p = params();
+    p.reject_variance_factor = factor;
+    DemFuser fuser(p, calib(), lookingDown());
+    DemMap map(p);
+    Scene s;
+    DemFuseStats st;
+    for (int k = 0; k < 3; ++k) {
+      s.plane(15.0, 0.1f, 5 + k);
+      EXPECT_TRUE(fuser.process(s.frame(), map, st).isOk());
+    }
+    for (int k = 0; k < ground_frames; ++k) {
+      s.plane(20.0, 0.1f, 50 + k);
+      EXPECT_TRUE(fuser.process(s.frame(), map, st).isOk());
+    }
+    double h = 0, sigma = 0;
+    EXPECT_TRUE(map.estimate(0, 0, h, sigma));
+    return h;
+  };
+  EXPECT_NEAR(heightAfter(2.0, 15), -20.0, 0.1);
+  EXPECT_GT(heightAfter(1.0, 15), -17.0);  // disabled: still nearer the object than the ground
+  EXPECT_GT(heightAfter(2.0, 1), -15.5);   // one frame of disagreement moves the cell little
+}
+
 TEST(DemFuser, NonFinitePoseIsNotFusedAndSaysWhy) {
   DemFuser fuser(params(), calib(), lookingDown());
   DemMap map(params());

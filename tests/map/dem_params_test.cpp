@@ -34,6 +34,8 @@ TEST(DemParams, EachBadFieldIsNamed) {
       {"min_disparity_px", [](DemParams& p) { p.min_disparity_px = -1.0; }},
       {"gate_chi2", [](DemParams& p) { p.gate_chi2 = 0.0; }},
       {"gate_chi2", [](DemParams& p) { p.gate_chi2 = 2e6; }},
+      {"reject_variance_factor", [](DemParams& p) { p.reject_variance_factor = 0.5; }},
+      {"reject_variance_factor", [](DemParams& p) { p.reject_variance_factor = NAN; }},
       {"min_sigma_m", [](DemParams& p) { p.min_sigma_m = -0.1; }},
       {"max_tiles", [](DemParams& p) { p.max_tiles = 0; }},
   };
