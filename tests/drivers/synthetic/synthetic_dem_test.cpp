@@ -167,7 +167,9 @@ TEST(SyntheticDem, BadArgumentsAreRejected) {
   EXPECT_FALSE(syntheticGroundTruthDem(*s.flight, 10, s.R_map_world, nan_cell));
 }
 
-TEST(SyntheticDem, FullBlimpFlightIsFast) {
+// The whole default flight (its time is printed for information; speed targets live in
+// benchmarks, not in unit tests): every cell is seen by at most the flight's 100 frames.
+TEST(SyntheticDem, FullBlimpFlightCountsAreBounded) {
   Flight s = openFlight("");  // 100 frames, 1024 x 768, 25-30 m, 70 m loop
   map::DemRaster r = window(0.1, -400, -400, 800, 800);
   const auto t0 = std::chrono::steady_clock::now();
@@ -175,7 +177,6 @@ TEST(SyntheticDem, FullBlimpFlightIsFast) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("ground-truth DEM, 100 frames, 800 x 800 cells: %.3f s\n", seconds);
-  EXPECT_LT(seconds, 4.0);  // ~0.3 s in Release; generous for sanitizer and debug builds
   double max_count = 0;
   for (float c : r.count) max_count = std::max(max_count, static_cast<double>(c));
   EXPECT_GT(max_count, 10.0);
