@@ -1,7 +1,5 @@
 #include "pipeline/realtime/slam_stages.hpp"
 
-#include <pthread.h>
-#include <sched.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -95,17 +93,11 @@ void SlamStages::onThreadStart(const std::string& stage) {
   if (stage == "publisher") sched = &p.publisher;
   if (stage == "mapper") {
     sched = &p.mapper;
-    // The map is never worth a late pose: under normal scheduling the mapper thread runs under
-    // SCHED_IDLE (for this thread only), so it gets a core only when no thread of the pose path
-    // (or anything else) wants it; where SCHED_IDLE is refused, nice +10. At 10 Hz the pose path
-    // leaves about half of two cores idle, and a frame the mapper cannot take is skipped and
-    // counted, never waited for.
-    if (sched->fifo_priority == 0) {
-      sched_param idle{};
-      idle.sched_priority = 0;
-      if (pthread_setschedparam(pthread_self(), SCHED_IDLE, &idle) != 0)
-        (void)setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 10);
-    }
+    // The map is never worth a late pose: under normal scheduling the mapper thread yields the
+    // cores to the pose path (nice +10 for this thread only; Linux nice is per thread). Not
+    // SCHED_IDLE: on saturated cores that starves the mapper, and with it the save_map command.
+    if (sched->fifo_priority == 0)
+      (void)setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 10);
   }
   if (!sched || (sched->cpus.empty() && sched->fifo_priority == 0)) return;
   std::string warning;
