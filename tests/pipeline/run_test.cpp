@@ -34,6 +34,22 @@ class Run : public ::testing::Test {
     if (err) *err = slurp(path("stderr.txt"));
     return code;
   }
+  // A copy of the KITTI sequence's calib.txt and its first `frames` image pairs (by name) in
+  // dir_/seq; returns that folder.
+  fs::path copyKittiPrefix(int frames) const {
+    const fs::path seq = dir_ / "seq";
+    for (const char* side : {"image_l", "image_r"}) {
+      fs::create_directories(seq / side);
+      std::vector<fs::path> images;
+      for (const auto& e : fs::directory_iterator(kKitti + "/" + side)) images.push_back(e.path());
+      std::sort(images.begin(), images.end());
+      for (int i = 0; i < frames; ++i)
+        fs::copy_file(images[static_cast<std::size_t>(i)],
+                      seq / side / images[static_cast<std::size_t>(i)].filename());
+    }
+    fs::copy_file(kKitti + "/calib.txt", seq / "calib.txt");
+    return seq;
+  }
   fs::path dir_;
 };
 
@@ -86,25 +102,11 @@ TEST_F(Run, BadInputGivesAClearErrorAndNonZeroExit) {
 TEST_F(Run, CorruptFrameKeepsWhatWasWritten) {
   if (!haveKitti()) GTEST_SKIP() << "no KITTI data at " << kKitti;
   // A copy of the first 5 frames with frame 3 of the left camera truncated.
-  const fs::path seq = dir_ / "seq";
-  fs::create_directories(seq / "image_l");
-  fs::create_directories(seq / "image_r");
-  fs::copy_file(kKitti + "/calib.txt", seq / "calib.txt");
-  std::vector<fs::path> left, right;
-  for (const auto& e : fs::directory_iterator(kKitti + "/image_l")) left.push_back(e.path());
-  for (const auto& e : fs::directory_iterator(kKitti + "/image_r")) right.push_back(e.path());
-  std::sort(left.begin(), left.end());
-  std::sort(right.begin(), right.end());
-  for (int i = 0; i < 5; ++i) {
-    fs::copy_file(left[static_cast<std::size_t>(i)],
-                  seq / "image_l" / left[static_cast<std::size_t>(i)].filename());
-    fs::copy_file(right[static_cast<std::size_t>(i)],
-                  seq / "image_r" / right[static_cast<std::size_t>(i)].filename());
-  }
-  fs::resize_file(seq / "image_l" / left[3].filename(), 100);
+  const fs::path seq = copyKittiPrefix(5);
+  fs::resize_file(seq / "image_l" / "000003.png", 100);
   std::string err;
   EXPECT_EQ(run("--source kitti:" + seq.string() + " --out " + path("o"), &err), 1);
-  EXPECT_NE(err.find(left[3].filename().string()), std::string::npos) << err;
+  EXPECT_NE(err.find("000003.png"), std::string::npos) << err;
   EXPECT_EQ(countLines(slurp(path("o/trajectory_kitti.txt"))), 3);  // frames 0..2 kept
   EXPECT_NE(slurp(path("o/stats.json")).find("\"error\""), std::string::npos);
 }
@@ -136,15 +138,8 @@ TEST_F(Run, ReusedOutputFolderHoldsOnlyThisRunsFiles) {
 TEST_F(Run, KittiFrameWithOneSideMissingIsSkippedAndCounted) {
   if (!haveKitti()) GTEST_SKIP() << "no KITTI data at " << kKitti;
   // The first 4 frames, the right image of frame 2 missing.
-  const fs::path seq = dir_ / "seq";
-  fs::create_directories(seq / "image_l");
-  fs::create_directories(seq / "image_r");
-  fs::copy_file(kKitti + "/calib.txt", seq / "calib.txt");
-  for (int i = 0; i < 4; ++i) {
-    const std::string name = "00000" + std::to_string(i) + ".png";
-    fs::copy_file(kKitti + "/image_l/" + name, seq / "image_l" / name);
-    if (i != 2) fs::copy_file(kKitti + "/image_r/" + name, seq / "image_r" / name);
-  }
+  const fs::path seq = copyKittiPrefix(4);
+  fs::remove(seq / "image_r" / "000002.png");
   std::ofstream(path("c.yaml")) << "dense_stereo: {enabled: false}\nmap: {enabled: false}\n";
   std::string err;
   ASSERT_EQ(
