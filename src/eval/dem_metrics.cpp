@@ -198,13 +198,14 @@ Result<PathStripScore> scorePathStrip(const map::DemRaster& dem,
 
   if (!fitPlane(x, y, z, nullptr, s.plane_a, s.plane_b, s.plane_c)) return s;
   std::vector<double> abs_r(n);
+  std::vector<char> keep(n);  // road surface: |r| <= surface_band_m (below)
   double sum_r2 = 0;
   for (std::size_t q = 0; q < n; ++q) {
     const double r = z[q] - (s.plane_a * x[q] + s.plane_b * y[q] + s.plane_c);
     sum_r2 += r * r;
     abs_r[q] = std::abs(r);
+    keep[q] = abs_r[q] <= surface_band_m;
   }
-  const std::vector<double> abs_r_ordered = abs_r;  // nth_element reorders abs_r
   s.plane_residual_std_m = std::sqrt(sum_r2 / n);
   const std::size_t rank = static_cast<std::size_t>(std::ceil(0.95 * n));  // 1-based, >= 1
   std::nth_element(abs_r.begin(), abs_r.begin() + (rank - 1), abs_r.end());
@@ -217,8 +218,6 @@ Result<PathStripScore> scorePathStrip(const map::DemRaster& dem,
   // The road surface: the cells within surface_band_m of the plane (what stands on the road, a
   // car or a post, or a gross error, is not road), a plane refitted to them and their residuals.
   if (!(surface_band_m > 0)) return s;
-  std::vector<char> keep(n);
-  for (std::size_t q = 0; q < n; ++q) keep[q] = abs_r_ordered[q] <= surface_band_m;
   double a = 0, b = 0, c = 0;
   if (!fitPlane(x, y, z, &keep, a, b, c)) return s;
   double sum_s2 = 0;
