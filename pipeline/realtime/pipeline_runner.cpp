@@ -189,6 +189,8 @@ Status PipelineRunner::run(std::vector<std::unique_ptr<FrameSlot>>& slots, Pipel
   if (static_cast<int>(slots.size()) < slotsNeeded())
     return Status::invalidArgument("pipeline: " + std::to_string(slots.size()) +
                                    " frame slots, needs " + std::to_string(slotsNeeded()));
+  if (graph_.prepare_slot)
+    for (auto& slot : slots) graph_.prepare_slot(*slot);
   report_ = PipelineReport{};
   timings_.clear();
   published_ = 0;

@@ -80,6 +80,12 @@ StageGraph SlamStages::graph(EdgePolicy capture_input) {
     g.stages.push_back(std::move(mapper));
   }
   g.on_thread_start = [this](const std::string& stage) { onThreadStart(stage); };
+  g.prepare_slot = [this](FrameSlot& s) {
+    const StereoCalibration& calib = source_.calibration();
+    s.frame.left.resize(calib.width, calib.height);
+    s.frame.right.resize(calib.width, calib.height);
+    stereo_stage_->prepareOutput(s.stereo);
+  };
   return g;
 }
 

@@ -49,6 +49,10 @@ struct StageGraph {
   // Called on each stage's own thread before its first frame, with the stage's name ("pipeline"
   // for the sequential run): thread name, affinity, priority.
   std::function<void(const std::string& stage)> on_thread_start;
+  // Optional: called once on every pooled slot before the first frame (on the calling thread),
+  // to size its buffers ahead of time. Without it a slot's first frame allocates and page-faults
+  // its buffers (about 25 ms per slot at 1024x768), a latency spike on the first frames.
+  std::function<void(FrameSlot&)> prepare_slot;
   Status validate() const;
 };
 

@@ -78,6 +78,15 @@ Status StereoStage::process(ImageView<const std::uint8_t> left, ImageView<const 
   return finish(left, right, feedback, out, observer);
 }
 
+void StereoStage::prepareOutput(StereoStageOutput& out) const {
+  if (!init_status_) return;
+  out.corner_px.reserve(max_points_);
+  out.corner_resp.reserve(max_points_);
+  out.points.reserve(max_points_);
+  out.stereo.reserve(max_points_);
+  if (dense_) dense_->prepareOutput(out.disparity);
+}
+
 Status StereoStage::prepare(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                             StereoStageOutput& out, Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;

@@ -87,6 +87,11 @@ class StereoStage {
   StereoStage& operator=(const StereoStage&) = delete;
   const Status& initStatus() const { return init_status_; }
 
+  // Sizes a pooled output for this stage once, before its first frame (the dense images
+  // allocated and touched, the point vectors reserved for the detector's bound), so that the
+  // first pass of each pooled output costs no more than the later ones.
+  void prepareOutput(StereoStageOutput& out) const;
+
   // Whether finish() reads the feedback (ROI tracking).
   bool needsFeedback() const { return params_.roi_tracking; }
 

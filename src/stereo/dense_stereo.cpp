@@ -341,6 +341,12 @@ void DenseStereo::matchRows(Stripe& s, DisparityResult& out) {
   s.stats.valid = counts.valid;
 }
 
+void DenseStereo::prepareOutput(DisparityResult& out) const {
+  out.disparity_px.resize(width_, height_);
+  out.sigma_d_px.resize(width_, height_);
+  out.curvature.resize(width_, height_);
+}
+
 Status DenseStereo::process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                             DisparityResult& out) {
   SerialExecutor serial;
@@ -358,9 +364,7 @@ Status DenseStereo::process(ImageView<const std::uint8_t> left, ImageView<const 
         std::to_string(height_) + ", got left " + std::to_string(left.width) + "x" +
         std::to_string(left.height) + " and right " + std::to_string(right.width) + "x" +
         std::to_string(right.height));
-  out.disparity_px.resize(width_, height_);
-  out.sigma_d_px.resize(width_, height_);
-  out.curvature.resize(width_, height_);
+  prepareOutput(out);
 
   // The task lambdas capture two pointers only (the executor takes them by reference anyway).
   struct Frame {

@@ -107,6 +107,9 @@ class DenseStereo {
                  DisparityResult& out, Executor& executor);
   Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                  DisparityResult& out);
+  // Sizes out's images for this stage's size as process() does: allocated (and zeroed, so every
+  // page is touched) once, ahead of the first frame.
+  void prepareOutput(DisparityResult& out) const;
 
  private:
   struct Stripe;

@@ -87,6 +87,45 @@ TEST(StereoStage, HalvesEqualOneCallAndRoisFollowTheFeedback) {
   }
 }
 
+// A pooled output sized by prepareOutput() is not reallocated by its first frame: the dense
+// images and the point vectors keep their buffers (the first pass of a pipeline slot costs what
+// the later ones cost), and the result is the one an unprepared output gets.
+TEST(StereoStage, PreparedOutputKeepsItsBuffersThroughTheFirstFrame) {
+  auto src = drivers::openStereoSource("synthetic:width=384,height=288,frames=1");
+  ASSERT_TRUE(src.isOk());
+  const StereoCalibration calib = (*src)->calibration();
+  StereoOdometryParams params;
+  params.dense = true;
+  params.dense_stereo.max_disp = 64;
+  StereoStage stage(params, calib);
+  ASSERT_TRUE(stage.initStatus().isOk());
+  StereoStageOutput prepared, fresh;
+  stage.prepareOutput(prepared);
+  ASSERT_EQ(prepared.disparity.disparity_px.width(), calib.width);
+  ASSERT_EQ(prepared.disparity.curvature.height(), calib.height);
+  const float* disparity = prepared.disparity.disparity_px.row(0);
+  const float* sigma = prepared.disparity.sigma_d_px.row(0);
+  const std::size_t capacity = prepared.points.capacity();
+  EXPECT_GT(capacity, 0u);
+  const TrackPoint* points = prepared.points.data();
+  const Eigen::Vector2f* corners = prepared.corner_px.data();
+  drivers::StereoFrame f;
+  auto more = (*src)->next(f);
+  ASSERT_TRUE(more.isOk() && more.value());
+  SerialExecutor ex;
+  ASSERT_TRUE(stage.process(f.left.cview(), f.right.cview(), {}, prepared, ex).isOk());
+  EXPECT_GT(prepared.points.size(), 50u);
+  EXPECT_LE(prepared.points.size(), capacity);
+  EXPECT_EQ(prepared.disparity.disparity_px.row(0), disparity);
+  EXPECT_EQ(prepared.disparity.sigma_d_px.row(0), sigma);
+  EXPECT_EQ(prepared.points.data(), points);
+  EXPECT_EQ(prepared.corner_px.data(), corners);
+  StereoStage twin(params, calib);
+  ASSERT_TRUE(twin.process(f.left.cview(), f.right.cview(), {}, fresh, ex).isOk());
+  EXPECT_TRUE(samePoints(prepared.points, fresh.points));
+  EXPECT_EQ(prepared.disparity.stats.valid, fresh.disparity.stats.valid);
+}
+
 TEST(StereoStage, RejectsWrongSizeAndMismatchedOutput) {
   auto src = drivers::openStereoSource("synthetic:width=256,height=192,frames=1");
   ASSERT_TRUE(src.isOk());

@@ -234,7 +234,8 @@ class CountingWork {
 };
 
 // The window opens once every pooled slot has carried a frame (slotsNeeded = 11 with the default
-// options; each slot's stereo output is sized on its first frame) and the per-point scratch
+// options; the runner sizes each slot's images and stereo output before the first frame through
+// the graph's prepare_slot, which this test does not count) and the per-point scratch
 // buffers have met this sequence's early frames. The EKF state needs no warm-up: P is
 // preallocated for max_landmarks, landmarks are added and retired inside it, and the map's
 // bookkeeping is preallocated for slam.map_reserve landmarks, far more than this run creates.

@@ -309,6 +309,38 @@ TEST(PipelineRunner, CaptureErrorKeepsEveryFrameBeforeIt) {
   expectStopsAt(&ScriptedWork::capture_fail_at_, 30, "scripted unreadable frame");
 }
 
+// The graph's prepare_slot hook sizes every pooled slot once, before the first frame is read,
+// in both modes.
+TEST(PipelineRunner, PreparesEverySlotBeforeTheFirstFrame) {
+  for (bool sequential : {false, true}) {
+    ScriptedWork work(12);
+    StageGraph g = work.graph();
+    int prepared = 0;
+    bool read_before_prepared = false;
+    g.prepare_slot = [&](FrameSlot& s) {
+      s.frame.right.resize(16, 8);
+      ++prepared;
+    };
+    auto read = g.source.read;
+    int needed = 0;
+    g.source.read = [&prepared, &needed, &read_before_prepared, read](FrameSlot& s) {
+      if (prepared < needed) read_before_prepared = true;
+      EXPECT_EQ(s.frame.right.width(), 16);
+      return read(s);
+    };
+    PipelineOptions o;
+    o.sequential = sequential;
+    PipelineRunner runner(o, std::move(g));
+    needed = runner.slotsNeeded();
+    auto slots = makeSlots(runner);
+    PipelineControl control;
+    ASSERT_TRUE(runner.run(slots, control, nullptr).isOk());
+    EXPECT_EQ(prepared, static_cast<int>(slots.size())) << "sequential " << sequential;
+    EXPECT_FALSE(read_before_prepared);
+    EXPECT_EQ(work.published_.size(), 12u);
+  }
+}
+
 TEST(PipelineRunner, RejectsTooFewSlotsAndBadOptions) {
   PipelineOptions o;
   ScriptedWork work(3);
