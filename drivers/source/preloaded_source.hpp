@@ -12,7 +12,7 @@ namespace svslam::drivers {
 class PreloadedSource final : public StereoSource {
  public:
   const StereoCalibration& calibration() const override { return inner_->calibration(); }
-  int size() const override { return static_cast<int>(frames_.size()); }
+  int size() const override { return static_cast<int>(frames_.size()) * loops_; }
   Result<bool> next(StereoFrame& out) override;
   int skippedFrames() const override { return inner_->skippedFrames(); }
   std::string skippedFramesDetail() const override { return inner_->skippedFramesDetail(); }
@@ -27,7 +27,16 @@ class PreloadedSource final : public StereoSource {
     return inner_->groundTruthDem(R_map_world, frames, raster);
   }
   // Starts again from the first frame (a benchmark replays the same frames twice).
-  void rewind() { next_ = 0; }
+  void rewind() {
+    next_ = 0;
+    loop_ = 0;
+  }
+  // Replays the stored frames `loops` times (1..1e6) in one stream: replay k continues the frame
+  // index (index + k n, n stored frames) and the clock (t_ns + k period, period = the stored
+  // stamps' span plus their last interval), so a flight whose frame n would be its frame 0 (a
+  // synthetic flight with loop_frames = n) runs on without a jump. Needs n >= 2 for loops > 1.
+  // Ground truth is the inner source's: none for the replays after the first.
+  Status setLoops(int loops);
 
  private:
   friend Result<std::unique_ptr<PreloadedSource>> preload(std::unique_ptr<StereoSource>, int,
@@ -35,6 +44,8 @@ class PreloadedSource final : public StereoSource {
   std::unique_ptr<StereoSource> inner_;
   std::vector<StereoFrame> frames_;
   std::size_t next_ = 0;
+  int loops_ = 1, loop_ = 0;
+  TimeNs period_ns_ = 0;
 };
 
 // Reads up to `max_frames` pairs (0 = all) of `inner` (which must be finite: size() >= 0).

@@ -50,6 +50,11 @@ Status applyOverrides(const ArgParser& p, config::RunConfig& cfg) {
                                    config::nameList(config::kEstimatorModeNames) + ")");
   if (p.flag("sequential")) cfg.pipeline.runner.sequential = true;
   if (p.flag("preload")) cfg.pipeline.preload = true;
+  if (p.has("loops")) {
+    auto n = p.getInt("loops", 1, 1000000);
+    if (!n) return n.status();
+    cfg.pipeline.replay_loops = *n;
+  }
   if (p.has("rate")) {
     auto r = p.getDouble("rate");
     if (!r) return r.status();
@@ -166,6 +171,9 @@ int runPipeline(const std::vector<std::string>& args) {
               "replay a recorded source in real time at HZ frames per second (frames stamped as "
               "if captured then; 0 = as fast as possible, the default)");
   p.addFlag("preload", "read the whole recorded sequence into memory before the run");
+  p.addOption("loops", "N",
+              "with --preload: replay the sequence N times in one run, frame index and clock "
+              "running on (soak tests; overrides the config)");
   p.addOption("lcm-url", "URL",
               "publish on LCM at URL (enables lcm; e.g. udpm://239.255.76.67:7667?ttl=0)");
   if (auto code = parseCommandLine(p, args)) return *code;
@@ -205,10 +213,15 @@ int runPipeline(const std::vector<std::string>& args) {
     logLine("warning: " + std::to_string(n) +
             " frame(s) of the source skipped: " + source->skippedFramesDetail());
   const bool live = source->size() < 0;
+  if (cfg.pipeline.replay_loops > 1 && (!cfg.pipeline.preload || live))
+    return fail(Status::invalidArgument(
+        "pipeline.replay_loops (--loops) > 1 needs a recorded source read into memory "
+        "(pipeline.preload, --preload)"));
   if (cfg.pipeline.preload && !live) {
     logLine("reading the sequence into memory");
-    auto pre = drivers::preloadSource(std::move(source), cfg.max_frames, stop);
+    auto pre = drivers::preload(std::move(source), cfg.max_frames, stop);
     if (!pre) return fail(pre.status());
+    if (Status s = (*pre)->setLoops(cfg.pipeline.replay_loops); !s) return fail(s);
     source = std::move(*pre);
   }
 

@@ -34,6 +34,12 @@ struct PipelineConfig {
   // Read the whole recorded sequence into memory before the run (a paced replay then measures
   // the pipeline, not the disk or the synthetic renderer). Ignored for live sources.
   bool preload = false;
+  // Replays of the preloaded sequence in one run (soak tests), the frame index and clock running
+  // on (drivers::PreloadedSource::setLoops). Needs preload when > 1.
+  int replay_loops = 1;
+  // latency.txt in the output folder: per published frame, its capture sequence number and the
+  // capture-to-publish latency (ms), flushed per line.
+  bool latency_log = false;
   double progress_period_s = 10.0;  // progress line on stderr every this many s (0 = never)
   // Per stage thread: CPU affinity and SCHED_FIFO priority (0 = normal scheduling).
   service::ThreadScheduling capture, stereo, estimator, publisher, mapper;

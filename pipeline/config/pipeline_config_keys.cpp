@@ -49,6 +49,12 @@ ConfigSection pipelineSection() {
              "frames per inter-stage queue"),
       flag("preload", SVSLAM_FIELD(pipeline.preload),
            "read the recorded sequence into memory first; --preload"),
+      number("replay_loops", SVSLAM_FIELD(pipeline.replay_loops), 1, 1000000, "",
+             "replays of the preloaded sequence in one run, frame index and clock running on "
+             "(needs preload when > 1); --loops"),
+      flag("latency_log", SVSLAM_FIELD(pipeline.latency_log),
+           "latency.txt: per published frame its sequence number and capture-to-publish "
+           "latency, ms"),
       number("progress_period_s", SVSLAM_FIELD(pipeline.progress_period_s), 0, 1e6, "s",
              "progress line on stderr every this many s; 0 = never"),
   };

@@ -21,6 +21,10 @@ Status RunPublisher::open(bool ground_truth) {
     if (Status s = cov_file_.open(out_dir_ + "/" + files::kPoseCovariance); !s) return s;
     cov_line_.reserve(36 * 32);  // 36 numbers of at most 31 characters each
   }
+  if (cfg_.pipeline.latency_log) {
+    if (Status s = latency_file_.open(out_dir_ + "/" + files::kLatency); !s) return s;
+    latency_line_.reserve(64);
+  }
   return Status::ok();
 }
 
@@ -28,6 +32,7 @@ void RunPublisher::close() {
   traj_.close();
   gt_.close();
   cov_file_.close();
+  latency_file_.close();
 }
 
 Status RunPublisher::publish(const rt::FrameSlot& slot) {
@@ -48,8 +53,15 @@ Status RunPublisher::publish(const rt::FrameSlot& slot) {
   summary_.add(slot.frame.index, sr);
   if (last_seq_ >= 0 && slot.seq > last_seq_ + 1) seq_gaps_ += slot.seq - last_seq_ - 1;
   last_seq_ = slot.seq;
-  if (!lcm_) return Status::ok();
   const std::int64_t now = rt::steadyNowNs();
+  if (cfg_.pipeline.latency_log) {
+    char line[64];
+    std::snprintf(line, sizeof line, "%lld %.3f", static_cast<long long>(slot.seq),
+                  static_cast<double>(now - slot.stamps.capture_ns) * 1e-6);
+    latency_line_.assign(line);
+    if (Status s = latency_file_.append(latency_line_); !s) return s;
+  }
+  if (!lcm_) return Status::ok();
   drivers::PoseReport p;
   p.t_ns = slot.frame.t_ns;
   p.publish_t_ns = slot.frame.t_ns + (now - slot.stamps.capture_ns);  // source clock

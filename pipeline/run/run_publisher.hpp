@@ -2,7 +2,9 @@
 // The publisher stage of `svslam run`: per frame, the trajectory lines (trajectory_kitti.txt,
 // trajectory_tum.txt), the pose covariance line (pose_covariance.txt, when the estimator has a
 // pose covariance), the ground truth line (groundtruth_kitti.txt, when the source knows it), the
-// run summary, and on LCM the pose with its covariance and, every lcm.stats_period_s, the stats.
+// run summary, the latency line (latency.txt, with pipeline.latency_log: "seq ms", the frame's
+// capture sequence number and its capture-to-publish latency), and on LCM the pose with its
+// covariance and, every lcm.stats_period_s, the stats.
 // Runs on one thread; every buffer is reused from frame to frame.
 #include <atomic>
 #include <cstdint>
@@ -42,8 +44,9 @@ class RunPublisher {
   const std::atomic<std::int64_t>& captured_;
   const rt::StageTimings* timings_ = nullptr;
   TrajectoryWriter traj_, gt_;
-  LineWriter cov_file_;
-  std::string cov_line_;  // one pose_covariance.txt line, reused
+  LineWriter cov_file_, latency_file_;
+  std::string cov_line_;      // one pose_covariance.txt line, reused
+  std::string latency_line_;  // one latency.txt line, reused
   RunSummary summary_;
   std::int64_t last_seq_ = -1, seq_gaps_ = 0, next_stats_ns_ = 0;
 };
