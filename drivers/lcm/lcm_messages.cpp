@@ -1,6 +1,7 @@
 // Conversions between the pipeline's reports and the svslam_lcm wire types (lcm_messages.hpp).
 #include "drivers/lcm/lcm_messages.hpp"
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstring>
@@ -79,7 +80,7 @@ bool scan(WireWalker& w, const svslam_lcm::pose_t*) {
 bool scan(WireWalker& w, const svslam_lcm::stats_t*) {
   std::int32_t ns = 0, nq = 0;
   return w.skip(8 + 40) && w.count(ns, 5) && w.strs(ns) && w.skip(24 * std::size_t(ns)) &&
-         w.count(nq, 5) && w.strs(nq) && w.skip(16 * std::size_t(nq) + 24) && w.atEnd();
+         w.count(nq, 5) && w.strs(nq) && w.skip(16 * std::size_t(nq) + 24 + 48) && w.atEnd();
 }
 bool scan(WireWalker& w, const svslam_lcm::map_summary_t*) {
   std::int32_t n = 0;
@@ -91,7 +92,7 @@ bool scan(WireWalker& w, const svslam_lcm::stereo_image_t*) {
          w.skip(std::size_t(r)) && w.atEnd();
 }
 bool scan(WireWalker& w, const svslam_lcm::command_t*) {
-  return w.skip(8 + 16) && w.str() && w.str() && w.atEnd();
+  return w.skip(8 + 16) && w.str() && w.str() && w.str() && w.atEnd();
 }
 bool scan(WireWalker& w, const svslam_lcm::command_status_t*) {
   return w.skip(8 + 16) && w.str() && w.skip(1) && w.str() && w.atEnd();
@@ -224,6 +225,16 @@ Result<svslam_lcm::stats_t> toLcm(const StatsReport& r) {
   m.e2e_p50_ms = r.e2e_p50_ms;
   m.e2e_p99_ms = r.e2e_p99_ms;
   m.e2e_max_ms = r.e2e_max_ms;
+  const CommandCounts& cc = r.commands;
+  if (cc.accepted < 0 ||
+      std::any_of(cc.refused.begin(), cc.refused.end(), [](std::int64_t n) { return n < 0; }))
+    return Status::invalidArgument("stats: negative command count");
+  m.commands_accepted = cc.accepted;
+  m.commands_refused_disabled = cc.refusedBy(CommandRefusal::kDisabled);
+  m.commands_refused_no_token = cc.refusedBy(CommandRefusal::kNoToken);
+  m.commands_refused_bad_token = cc.refusedBy(CommandRefusal::kBadToken);
+  m.commands_refused_rate_limited = cc.refusedBy(CommandRefusal::kRateLimited);
+  m.commands_malformed = cc.refusedBy(CommandRefusal::kMalformed);
   return m;
 }
 
@@ -232,8 +243,8 @@ Result<StatsReport> fromLcm(const svslam_lcm::stats_t& m) {
   const auto nq = static_cast<std::size_t>(std::max(m.num_queues, 0));
   if (m.num_stages < 0 || m.stage_name.size() != ns || m.p50_ms.size() != ns ||
       m.p99_ms.size() != ns || m.max_ms.size() != ns || m.num_queues < 0 ||
-      m.queue_name.size() != nq || m.queue_depth.size() != nq ||
-      m.queue_capacity.size() != nq || m.queue_drops.size() != nq)
+      m.queue_name.size() != nq || m.queue_depth.size() != nq || m.queue_capacity.size() != nq ||
+      m.queue_drops.size() != nq)
     return Status::invalidArgument("stats_t: array sizes differ from num_stages / num_queues");
   StatsReport r;
   auto t = fromUtime(m.utime);
@@ -250,6 +261,13 @@ Result<StatsReport> fromLcm(const svslam_lcm::stats_t& m) {
   r.e2e_p50_ms = m.e2e_p50_ms;
   r.e2e_p99_ms = m.e2e_p99_ms;
   r.e2e_max_ms = m.e2e_max_ms;
+  r.commands.accepted = m.commands_accepted;
+  auto set = [&](CommandRefusal k, std::int64_t n) { r.commands.refused[static_cast<int>(k)] = n; };
+  set(CommandRefusal::kDisabled, m.commands_refused_disabled);
+  set(CommandRefusal::kNoToken, m.commands_refused_no_token);
+  set(CommandRefusal::kBadToken, m.commands_refused_bad_token);
+  set(CommandRefusal::kRateLimited, m.commands_refused_rate_limited);
+  set(CommandRefusal::kMalformed, m.commands_malformed);
   // Same checks as on the way out.
   if (auto back = toLcm(r); !back) return back.status();
   return r;
@@ -298,6 +316,7 @@ Result<svslam_lcm::command_t> toLcm(const Command& c) {
   m.seq = c.seq;
   m.command = commandName(c.kind);
   m.argument = c.argument;
+  m.token = c.token;
   return m;
 }
 
@@ -311,6 +330,7 @@ Result<Command> fromLcm(const svslam_lcm::command_t& m) {
   c.seq = m.seq;
   c.kind = *kind;
   c.argument = m.argument;
+  c.token = m.token;
   return c;
 }
 

@@ -20,6 +20,7 @@
 #include "core/camera.hpp"
 #include "core/status.hpp"
 #include "core/time.hpp"
+#include "drivers/lcm/command_gate.hpp"
 #include "drivers/source/stereo_source.hpp"
 #include "svslam_lcm/command_status_t.hpp"
 #include "svslam_lcm/command_t.hpp"
@@ -65,6 +66,7 @@ struct StatsReport {
   std::vector<StageLatency> stages;
   std::vector<QueueReport> queues;
   double e2e_p50_ms = 0, e2e_p99_ms = 0, e2e_max_ms = 0;  // capture -> publish, milliseconds
+  CommandCounts commands;  // commands received since start: accepted, refused by reason
 };
 
 struct MapSummaryReport {
@@ -80,6 +82,7 @@ struct Command {
   std::int64_t seq = 0;
   CommandKind kind = CommandKind::kReset;
   std::string argument;  // e.g. the file of save_map; may be empty
+  std::string token;     // shared secret of the service (CommandGate); empty = none
 };
 
 struct CommandStatus {

@@ -34,20 +34,21 @@ Status LcmParams::validate() const {
   return Status::ok();
 }
 
-Result<std::unique_ptr<LcmLink>> LcmLink::open(const LcmParams& params) {
+Result<std::unique_ptr<LcmLink>> LcmLink::open(const LcmParams& params, CommandGate gate) {
   if (Status s = params.validate(); !s) return s;
   lcm_t* lcm = lcm_create(params.url.c_str());
   if (lcm == nullptr) {
     std::string hint;
     if (params.url.rfind("udpm://", 0) == 0)
-      hint = " (udpm needs a multicast route, e.g. `ip route add 239.0.0.0/8 dev lo`; see "
-             "docs/lcm.md)";
+      hint =
+          " (udpm needs a multicast route, e.g. `ip route add 239.0.0.0/8 dev lo`; see "
+          "docs/lcm.md)";
     else if (params.url.rfind("file://", 0) == 0)
       hint = " (log file missing, empty or not writable)";
     return Status::ioError("LCM: cannot create an LCM instance for URL '" + params.url + "'" +
                            hint);
   }
-  std::unique_ptr<LcmLink> link(new LcmLink(params, lcm));
+  std::unique_ptr<LcmLink> link(new LcmLink(params, lcm, std::move(gate)));
   link->command_sub_ =
       lcm_subscribe(lcm, params.command_channel.c_str(), &LcmLink::commandThunk, link.get());
   if (link->command_sub_ == nullptr)
@@ -56,7 +57,8 @@ Result<std::unique_ptr<LcmLink>> LcmLink::open(const LcmParams& params) {
   return link;
 }
 
-LcmLink::LcmLink(LcmParams params, _lcm_t* lcm) : params_(std::move(params)), lcm_(lcm) {}
+LcmLink::LcmLink(LcmParams params, _lcm_t* lcm, CommandGate gate)
+    : params_(std::move(params)), lcm_(lcm), gate_(std::move(gate)) {}
 
 LcmLink::~LcmLink() {
   if (lcm_ != nullptr) lcm_destroy(lcm_);  // frees the subscriptions too
@@ -69,8 +71,7 @@ Status LcmLink::publishMsg(const std::string& channel, const Result<Msg>& msg) {
   if (Status s = encodeLcm(msg.value(), publish_buf_); !s) return s;
   if (lcm_publish(lcm_, channel.c_str(), publish_buf_.data(),
                   static_cast<unsigned int>(publish_buf_.size())) != 0)
-    return Status::ioError("LCM: publishing on '" + channel + "' via '" + params_.url +
-                           "' failed");
+    return Status::ioError("LCM: publishing on '" + channel + "' via '" + params_.url + "' failed");
   published_.fetch_add(1);
   return Status::ok();
 }
@@ -125,6 +126,14 @@ void LcmLink::onCommand(const std::uint8_t* data, std::size_t size) {
     last_malformed_ = params_.command_channel + ": " + c.status().message();
     return;
   }
+  const std::int64_t now_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                  std::chrono::steady_clock::now().time_since_epoch())
+                                  .count();
+  if (const auto refusal = gate_.admit(c->token, now_ns)) {
+    last_refused_ = std::string(refusalName(*refusal)) + ": " + commandName(c->kind) + " seq " +
+                    std::to_string(c->seq);
+    return;
+  }
   if (pending_.size() >= kMaxPendingCommands) {  // nobody polls: keep the newest
     pending_.erase(pending_.begin());
     malformed_.fetch_add(1);
@@ -139,6 +148,18 @@ bool LcmLink::takePending(std::vector<Command>& out) {
   for (auto& c : pending_) out.push_back(std::move(c));
   pending_.clear();
   return true;
+}
+
+CommandCounts LcmLink::commandCounts() const {
+  std::lock_guard<std::mutex> lock(pending_mu_);
+  CommandCounts c = gate_.counts();
+  c.refused[static_cast<int>(CommandRefusal::kMalformed)] = malformed_.load();
+  return c;
+}
+
+std::string LcmLink::lastRefused() const {
+  std::lock_guard<std::mutex> lock(pending_mu_);
+  return last_refused_;
 }
 
 std::string LcmLink::lastMalformed() const {

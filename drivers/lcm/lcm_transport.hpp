@@ -10,6 +10,10 @@
 // serialises sends with its own transmit lock and memq guards its queue with its own mutex.
 // Handlers (the command handler and subscribeRaw handlers) run on the thread that is inside
 // pollCommands() / handle().
+//
+// Commands pass a CommandGate (command_gate.hpp) when they are received: only the commands it
+// accepts reach pollCommands(); the refused ones are counted by reason (commandCounts()) and
+// get no answer.
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -21,6 +25,7 @@
 #include <vector>
 
 #include "core/status.hpp"
+#include "drivers/lcm/command_gate.hpp"
 #include "drivers/lcm/lcm_messages.hpp"
 
 struct _lcm_t;  // lcm/lcm.h's lcm_t
@@ -58,9 +63,11 @@ class LcmLink {
   // Handler of a raw subscription: the encoded message bytes.
   using RawHandler = std::function<void(const std::uint8_t* data, std::size_t size)>;
 
-  // Creates the LCM instance and subscribes to the command channel. Error naming the URL when
-  // LCM cannot be created (e.g. udpm without a multicast route, unwritable log file).
-  static Result<std::unique_ptr<LcmLink>> open(const LcmParams& params);
+  // Creates the LCM instance and subscribes to the command channel; `gate` decides which
+  // commands are accepted (default: none). Error naming the URL when LCM cannot be created
+  // (e.g. udpm without a multicast route, unwritable log file).
+  static Result<std::unique_ptr<LcmLink>> open(const LcmParams& params,
+                                               CommandGate gate = CommandGate());
   ~LcmLink();
   LcmLink(const LcmLink&) = delete;
   LcmLink& operator=(const LcmLink&) = delete;
@@ -80,9 +87,9 @@ class LcmLink {
   Status publishRaw(const std::string& channel, const void* data, std::size_t size);
 
   // Handles incoming messages for at most timeout_ms (>= 0) and appends the valid commands
-  // received to `out`. Returns early once at least one command arrived (after draining what
-  // is already queued). Malformed or undecodable messages on the command channel are counted
-  // (malformedCount) and ignored. Error only when LCM itself fails.
+  // received and accepted by the gate to `out`. Returns early once at least one command arrived
+  // (after draining what is already queued). Malformed or undecodable messages on the command
+  // channel are counted (malformedCount) and ignored. Error only when LCM itself fails.
   Status pollCommands(int timeout_ms, std::vector<Command>& out);
 
   // Subscribes `handler` to `channel` (validateChannelName); returns a subscription id.
@@ -98,13 +105,18 @@ class LcmLink {
   std::int64_t published() const { return published_.load(); }
   // Message of the last malformed command ("" when none).
   std::string lastMalformed() const;
+  // Commands accepted and refused by reason since open (kMalformed = malformedCount()).
+  // Thread-safe.
+  CommandCounts commandCounts() const;
+  // "<reason>: <command> seq <n>" of the last refused command ("" when none; never the token).
+  std::string lastRefused() const;
 
  private:
   struct RawSub {
     RawHandler fn;
     _lcm_subscription_t* sub = nullptr;
   };
-  LcmLink(LcmParams params, _lcm_t* lcm);
+  LcmLink(LcmParams params, _lcm_t* lcm, CommandGate gate);
   template <class Msg>
   Status publishMsg(const std::string& channel, const Result<Msg>& msg);
   Result<bool> handleLocked(int timeout_ms);  // precondition: handle_mu_ held
@@ -124,9 +136,11 @@ class LcmLink {
   std::map<int, std::unique_ptr<RawSub>> subs_;
   int next_sub_id_ = 1;
 
-  mutable std::mutex pending_mu_;  // guards pending_ and last_malformed_
+  mutable std::mutex pending_mu_;  // guards pending_, last_malformed_, gate_, last_refused_
   std::vector<Command> pending_;
   std::string last_malformed_;
+  CommandGate gate_;
+  std::string last_refused_;
 
   std::atomic<std::int64_t> malformed_{0};
   std::atomic<std::int64_t> published_{0};

@@ -88,7 +88,9 @@ std::string statsLine(const drivers::StatsReport& r) {
       .addRaw("queues", queues + "]")
       .add("e2e_p50_ms", r.e2e_p50_ms, 3)
       .add("e2e_p99_ms", r.e2e_p99_ms, 3)
-      .add("e2e_max_ms", r.e2e_max_ms, 3);
+      .add("e2e_max_ms", r.e2e_max_ms, 3)
+      .add("commands_accepted", r.commands.accepted)
+      .add("commands_refused", r.commands.refusedTotal());
   return j.str();
 }
 

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "drivers/lcm/command_token.hpp"
 #include "drivers/lcm/lcm_transport.hpp"
 #include "drivers/source/preloaded_source.hpp"
 #include "drivers/source/stereo_source.hpp"
@@ -109,6 +110,49 @@ void handleCommands(drivers::LcmLink& lcm, rt::SlamStages& work, rt::PipelineCon
   }
 }
 
+// Logs refused commands (commands_refused by reason, the last one) at most once per
+// kPeriodNs, so a flood of refused commands gives one line a second, not one per command.
+class RefusedCommandLog {
+ public:
+  static constexpr std::int64_t kPeriodNs = 1'000'000'000;
+
+  // now_ns: steady clock, ns. force: log now whatever the time of the last line.
+  void update(const drivers::LcmLink& lcm, std::int64_t now_ns, bool force = false) {
+    const drivers::CommandCounts c = lcm.commandCounts();
+    if (c.refusedTotal() == logged_.refusedTotal()) return;
+    if (!force && now_ns < next_ns_) return;
+    std::string by;
+    for (int k = 0; k < drivers::kNumCommandRefusals; ++k) {
+      const std::int64_t n = c.refused[k] - logged_.refused[k];
+      if (n > 0)
+        by += std::string(by.empty() ? "" : ", ") + std::to_string(n) + " " +
+              drivers::refusalName(static_cast<drivers::CommandRefusal>(k));
+    }
+    std::string last = lcm.lastRefused();
+    if (c.refusedBy(drivers::CommandRefusal::kMalformed) >
+        logged_.refusedBy(drivers::CommandRefusal::kMalformed))
+      last += (last.empty() ? "" : "; ") + lcm.lastMalformed();
+    logLine("refused " + std::to_string(c.refusedTotal() - logged_.refusedTotal()) +
+            " LCM command(s) (" + by + "); last: " + last);
+    logged_ = c;
+    next_ns_ = now_ns + kPeriodNs;
+  }
+
+ private:
+  drivers::CommandCounts logged_;
+  std::int64_t next_ns_ = 0;
+};
+
+// The token of lcm.commands (read from its file) when LCM and commands are on; "" otherwise.
+Result<std::string> commandToken(const config::RunConfig& cfg) {
+  if (!cfg.lcm.enabled || !cfg.lcm.commands.enabled) return std::string();
+  auto token = drivers::readCommandToken(cfg.lcm.commands.token_file);
+  if (!token)
+    return Status(token.status().code(),
+                  "lcm.commands.enabled is true but the " + token.status().message());
+  return token;
+}
+
 // The outputs of a run stopped before its source delivered a frame (a stop signal while an
 // lcm: source waited for its first frame): empty trajectories and stats.json; exit 0.
 int finishWithoutFrames(const config::RunConfig& cfg, const std::string& source_spec,
@@ -149,7 +193,8 @@ int runPipeline(const std::vector<std::string>& args) {
       "when the source knows it, groundtruth_kitti.txt. In ekf mode (default) also\n"
       "pose_covariance.txt (6x6 per frame, row-major, [rot rad, trans m]) and\n"
       "landmarks.ply (position + 1-sigma radii). With lcm.enabled (or --lcm-url) poses\n"
-      "with covariance, stats and the map summary go out on LCM and commands are taken.\n"
+      "with covariance, stats and the map summary go out on LCM; commands are taken only\n"
+      "with lcm.commands.enabled and the token of lcm.commands.token_file.\n"
       "SIGTERM/SIGINT/SIGHUP stop capture, drain the frames in flight, write every output\n"
       "and exit 0 (also during --preload or while a source waits for its first frame).\n"
       "An output folder used before loses the files of the earlier run that this run\n"
@@ -185,6 +230,9 @@ int runPipeline(const std::vector<std::string>& args) {
   if (Status s = config::loadRunConfig(p.has("config") ? p.get("config") : "", cfg); !s)
     return fail(s);
   if (Status s = applyOverrides(p, cfg); !s) return fail(s);
+  // Commands enabled without a usable token file: no start at all.
+  auto command_token = commandToken(cfg);
+  if (!command_token) return fail(command_token.status());
   {
     const long ncpu = ::sysconf(_SC_NPROCESSORS_CONF);
     const std::pair<const char*, const service::ThreadScheduling*> stages[] = {
@@ -233,7 +281,9 @@ int runPipeline(const std::vector<std::string>& args) {
 
   std::unique_ptr<drivers::LcmLink> lcm;
   if (cfg.lcm.enabled) {
-    auto l = drivers::LcmLink::open(cfg.lcm.params);
+    const drivers::CommandAuthParams& auth = cfg.lcm.commands;
+    auto l = drivers::LcmLink::open(
+        cfg.lcm.params, drivers::CommandGate(auth.enabled, *command_token, auth.max_per_s));
     if (!l) return fail(l.status());
     lcm = std::move(*l);
   }
@@ -269,6 +319,7 @@ int runPipeline(const std::vector<std::string>& args) {
     ready_sent = true;
   }
   std::int64_t last_published = 0;
+  RefusedCommandLog refused_log;
   const std::int64_t progress_ns = static_cast<std::int64_t>(cfg.pipeline.progress_period_s * 1e9);
   std::int64_t next_progress = rt::steadyNowNs() + progress_ns;
   auto tick = [&] {
@@ -284,7 +335,10 @@ int runPipeline(const std::vector<std::string>& args) {
       logLine(std::string("stop requested") + (sig ? " (signal " + std::to_string(sig) + ")" : "") +
               ": draining the frames in flight");
     }
-    if (lcm) handleCommands(*lcm, work, control);
+    if (lcm) {
+      handleCommands(*lcm, work, control);
+      refused_log.update(*lcm, now);
+    }
     const std::int64_t published = runner.published();
     if (published > last_published) {
       watchdog.progress(now);
@@ -315,6 +369,10 @@ int runPipeline(const std::vector<std::string>& args) {
   run::RunSummary summary = work.summary();
   summary.source_frames_skipped = source->skippedFrames();
   summary.source_frames_skipped_detail = source->skippedFramesDetail();
+  if (lcm) {
+    refused_log.update(*lcm, rt::steadyNowNs(), true);
+    summary.lcm_commands = lcm->commandCounts();
+  }
   if (Status s =
           run::writeFileAtomic(out_dir + "/" + run::files::kStats,
                                run::statsJson(cfg, source_spec, summary, work.outputs(), times, rep,

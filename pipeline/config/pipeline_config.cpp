@@ -17,6 +17,8 @@ Status checkPipelineConfig(const std::string& file, const PipelineConfig& p, con
       return Status::invalidArgument(file + ": pipeline.scheduling." + stage + ": " + s.message());
   if (Status s = l.params.validate(); !s)
     return Status::invalidArgument(file + ": lcm: " + s.message());
+  if (Status s = l.commands.validate(); !s)
+    return Status::invalidArgument(file + ": " + s.message());
   return Status::ok();
 }
 

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/status.hpp"
+#include "drivers/lcm/command_gate.hpp"
 #include "drivers/lcm/lcm_transport.hpp"
 #include "pipeline/config/enum_names.hpp"
 #include "pipeline/realtime/pipeline_options.hpp"
@@ -46,9 +47,10 @@ struct PipelineConfig {
 };
 
 struct LcmConfig {
-  bool enabled = false;         // publish poses / stats / map and listen for commands
-  drivers::LcmParams params;    // url and channel names
-  double stats_period_s = 1.0;  // stats and map summary every this many s
+  bool enabled = false;                 // publish poses / stats / map and listen for commands
+  drivers::LcmParams params;            // url and channel names
+  double stats_period_s = 1.0;          // stats and map summary every this many s
+  drivers::CommandAuthParams commands;  // lcm.commands.*: who may command the service
 };
 
 struct ServiceConfig {

@@ -76,11 +76,26 @@ ConfigSection lcmSection() {
       text("map_tile_channel", SVSLAM_FIELD(lcm.params.map_tile_channel),
            "svslam_lcm.map_tile_t, the elevation map tiles changed, every map.publish_period_s"),
       text("command_channel", SVSLAM_FIELD(lcm.params.command_channel),
-           "svslam_lcm.command_t: reset | save_map | pause | resume | shutdown"),
+           "svslam_lcm.command_t: reset | save_map | pause | resume | shutdown (see "
+           "lcm.commands)"),
       text("status_channel", SVSLAM_FIELD(lcm.params.status_channel),
            "svslam_lcm.command_status_t answers"),
       number("stats_period_s", SVSLAM_FIELD(lcm.stats_period_s), 0.01, 3600, "s",
              "stats and map summary every this many s"),
+  };
+  return s;
+}
+
+ConfigSection lcmCommandsSection() {
+  ConfigSection s{"lcm.commands", "who may command the service over LCM (docs/lcm.md)", {}};
+  s.keys = {
+      flag("enabled", SVSLAM_FIELD(lcm.commands.enabled),
+           "false: every command is refused and counted; true: needs token_file"),
+      text("token_file", SVSLAM_FIELD(lcm.commands.token_file),
+           "file holding the shared token commands must carry; mode 0600/0400 (no group or "
+           "other access), else the service refuses to start"),
+      number("max_per_s", SVSLAM_FIELD(lcm.commands.max_per_s), 0.1, 1000, "1/s",
+             "authenticated commands per second, bursts of as many; the excess is refused"),
   };
   return s;
 }
@@ -109,6 +124,7 @@ std::vector<ConfigSection> pipelineConfigSections() {
           scheduling("publisher", SVSLAM_FIELD(pipeline.publisher)),
           scheduling("mapper", SVSLAM_FIELD(pipeline.mapper)),
           lcmSection(),
+          lcmCommandsSection(),
           serviceSection()};
 }
 

@@ -99,6 +99,7 @@ void RunPublisher::publishStats(TimeNs t_ns) {
     r.e2e_p99_ms = e2e.p99_ms;
     r.e2e_max_ms = e2e.max_ms;
   }
+  r.commands = lcm_->commandCounts();
   (void)lcm_->publishStats(r);
 }
 

@@ -123,6 +123,18 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
   p.addRaw("queues", queues);
   j.addRaw("pipeline", p.str());
   if (!map_json.empty()) j.addRaw("map", map_json);
+  if (s.lcm_commands) {
+    const drivers::CommandCounts& c = *s.lcm_commands;
+    JsonObject refused;
+    for (int k = 0; k < drivers::kNumCommandRefusals; ++k)
+      refused.add(drivers::refusalName(static_cast<drivers::CommandRefusal>(k)), c.refused[k]);
+    JsonObject cj;
+    cj.add("enabled", cfg.lcm.commands.enabled)
+        .add("accepted", c.accepted)
+        .add("refused", c.refusedTotal())
+        .addRaw("refused_by_reason", refused.str());
+    j.addRaw("lcm_commands", cj.str());
+  }
   if (!error.empty()) j.add("error", error);
   return j.str() + "\n";
 }

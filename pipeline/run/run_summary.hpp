@@ -1,10 +1,12 @@
 #pragma once
 // What `svslam run` accumulates over the frames and writes to stats.json.
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "drivers/lcm/command_gate.hpp"
 #include "pipeline/config/run_config.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
 #include "pipeline/run/run_outputs.hpp"
@@ -26,6 +28,8 @@ struct RunSummary {
   // Frames of the recording the source left out (kitti: one side missing) and their names.
   int source_frames_skipped = 0;
   std::string source_frames_skipped_detail;
+  // LCM commands received (accepted, refused by reason); empty when LCM is off.
+  std::optional<drivers::CommandCounts> lcm_commands;
 
   // Adds one processed frame (source index `frame`).
   void add(int frame, const SlamFrameResult& r);

@@ -1,9 +1,13 @@
 // svslam run on LCM, between processes: a `svslam listen` subscriber receives every pose with
-// its covariance during a replay; commands (pause, resume, save_map, shutdown) sent to a running
-// `svslam run` are applied and answered. Over udpm inside a private network namespace with a
-// loopback multicast route (skipped with a message where unshare is not permitted).
+// its covariance during a replay; commands (pause, resume, save_map, shutdown) carrying the
+// service's token are applied and answered; a shutdown with a wrong or no token, or sent while
+// commands are disabled (the default), is ignored and counted in stats.json; commands enabled
+// without a usable token file stop the run before it starts. Over udpm inside a private network
+// namespace with a loopback multicast route (skipped with a message where unshare is not
+// permitted).
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -14,6 +18,7 @@
 #include <fstream>
 #include <mutex>
 #include <sstream>
+#include <string>
 #include <thread>
 
 #include "cli_helpers.hpp"
@@ -30,6 +35,31 @@ namespace {
 using test::slurp;
 
 const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
+const char* kToken = "lcm-pipeline-test-token-7f3a";
+
+// Writes `dir`/command.token (mode 0600) and `dir`/svslam.yaml enabling commands with it;
+// returns the config path.
+std::string writeCommandConfig(const fs::path& dir) {
+  const fs::path token = dir / "command.token";
+  std::ofstream(token) << kToken << "\n";
+  ::chmod(token.c_str(), 0600);
+  const fs::path cfg = dir / "svslam.yaml";
+  std::ofstream(cfg) << "lcm:\n  commands:\n    enabled: true\n    token_file: " << token.string()
+                     << "\n";
+  return cfg.string();
+}
+
+// The number after `"key": ` in `json` (-1 when absent).
+long long jsonCount(const std::string& json, const std::string& key) {
+  const std::string k = "\"" + key + "\": ";
+  const std::size_t at = json.find(k);
+  return at == std::string::npos ? -1 : std::atoll(json.c_str() + at + k.size());
+}
+
+bool running(pid_t pid) {
+  int st = 0;
+  return ::waitpid(pid, &st, WNOHANG) == 0;
+}
 
 // Starts `cmd` with /bin/sh in the background; returns its pid.
 pid_t spawn(const std::string& cmd) {
@@ -183,8 +213,8 @@ TEST(LcmPipeline, InnerCommandsAreAppliedAndAnswered) {
     GTEST_SKIP() << "runs inside the namespace of CommandsAreAppliedAndAnswered";
   const fs::path dir = fs::temp_directory_path() / ("svslam_lcmcmd_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  const pid_t run = spawn(std::string(SVSLAM_CLI) +
-                          " run --source synthetic:width=320,height=240,frames=2000 --rate 20"
+  const pid_t run = spawn(std::string(SVSLAM_CLI) + " run --config " + writeCommandConfig(dir) +
+                          " --source synthetic:width=320,height=240,frames=2000 --rate 20"
                           " --lcm-url '" +
                           kUrl + "' --out " + (dir / "out").string() + " > " +
                           (dir / "run_out.txt").string() + " 2>&1");
@@ -202,7 +232,7 @@ TEST(LcmPipeline, InnerCommandsAreAppliedAndAnswered) {
     // Resend until answered (the run may not be listening yet), at most 20 s.
     const auto t0 = std::chrono::steady_clock::now();
     while (!sink.has(seq) && std::chrono::steady_clock::now() - t0 < 20s) {
-      (void)(*link)->publishCommand({0, seq, k, arg});
+      (void)(*link)->publishCommand({0, seq, k, arg, kToken});
       std::this_thread::sleep_for(300ms);
     }
     return sink.find(seq);
@@ -230,11 +260,143 @@ TEST(LcmPipeline, InnerCommandsAreAppliedAndAnswered) {
   EXPECT_GT(lines, 0);
   EXPECT_LT(lines, 2000);
   EXPECT_NE(stats.find("\"frames\": " + std::to_string(lines) + ","), std::string::npos) << stats;
+  EXPECT_GE(jsonCount(stats, "accepted"), 4) << stats;
   fs::remove_all(dir);
 }
 
 TEST(LcmPipeline, CommandsAreAppliedAndAnswered) {
   runInNamespace("CommandsAreAppliedAndAnswered");
+}
+
+// Sends `c` every 100 ms for `period` (no answer expected).
+void sendFor(LcmLink& link, const Command& c, std::chrono::milliseconds period) {
+  const auto t0 = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - t0 < period) {
+    (void)link.publishCommand(c);
+    std::this_thread::sleep_for(100ms);
+  }
+}
+
+TEST(LcmPipeline, InnerWrongTokenShutdownIsIgnoredAndCounted) {
+  if (!inner("WrongTokenShutdownIsIgnoredAndCounted"))
+    GTEST_SKIP() << "runs inside the namespace of WrongTokenShutdownIsIgnoredAndCounted";
+  const fs::path dir = fs::temp_directory_path() / ("svslam_lcmtok_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const pid_t run = spawn(std::string(SVSLAM_CLI) + " run --config " + writeCommandConfig(dir) +
+                          " --source synthetic:width=320,height=240,frames=2000 --rate 20"
+                          " --lcm-url '" +
+                          kUrl + "' --out " + (dir / "out").string() + " > " +
+                          (dir / "run_out.txt").string() + " 2>&1");
+  LcmParams p;
+  p.url = kUrl;
+  auto link = LcmLink::open(p);
+  ASSERT_TRUE(link.isOk()) << link.status().message();
+  StatusSink sink;
+  ASSERT_TRUE((*link)->subscribeRaw(p.status_channel, sink.handler()).isOk());
+  std::atomic<bool> stop{false};
+  std::thread rx([&] {
+    while (!stop.load()) (void)(*link)->handle(50);
+  });
+  // Wait until the run answers a resume (it listens), then try to stop it without the token.
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!sink.has(1) && std::chrono::steady_clock::now() - t0 < 20s) {
+    (void)(*link)->publishCommand({0, 1, CommandKind::kResume, "", kToken});
+    std::this_thread::sleep_for(300ms);
+  }
+  ASSERT_TRUE(sink.has(1)) << slurp(dir / "run_out.txt");
+  sendFor(**link, {0, 2, CommandKind::kShutdown, "", "not-the-token"}, 1500ms);
+  sendFor(**link, {0, 3, CommandKind::kShutdown, "", ""}, 1000ms);
+  EXPECT_TRUE(running(run)) << "a shutdown without the right token stopped the run";
+  EXPECT_FALSE(sink.has(2));  // refused commands get no answer
+  EXPECT_FALSE(sink.has(3));
+  while (!sink.has(4) && std::chrono::steady_clock::now() - t0 < 40s) {
+    (void)(*link)->publishCommand({0, 4, CommandKind::kShutdown, "", kToken});
+    std::this_thread::sleep_for(300ms);
+  }
+  const int rc = waitExit(run, std::chrono::seconds(30));
+  stop = true;
+  rx.join();
+  const std::string log = slurp(dir / "run_out.txt");
+  EXPECT_EQ(rc, 0) << log;
+  const std::string stats = slurp(dir / "out" / "stats.json");
+  EXPECT_GE(jsonCount(stats, "bad_token"), 5) << stats;
+  EXPECT_GE(jsonCount(stats, "no_token"), 3) << stats;
+  EXPECT_EQ(jsonCount(stats, "disabled"), 0) << stats;
+  EXPECT_GE(jsonCount(stats, "accepted"), 2) << stats;
+  EXPECT_NE(log.find("LCM command(s) ("), std::string::npos) << log;
+  EXPECT_EQ(log.find("not-the-token"), std::string::npos) << log;  // tokens are never logged
+  // Rate-limited log: about one line a second, not one per refused command.
+  EXPECT_LE(countLines(log, "LCM command(s) ("), 5) << log;
+  fs::remove_all(dir);
+}
+
+TEST(LcmPipeline, WrongTokenShutdownIsIgnoredAndCounted) {
+  runInNamespace("WrongTokenShutdownIsIgnoredAndCounted");
+}
+
+TEST(LcmPipeline, InnerCommandsDisabledByDefaultIgnoreShutdown) {
+  if (!inner("CommandsDisabledByDefaultIgnoreShutdown"))
+    GTEST_SKIP() << "runs inside the namespace of CommandsDisabledByDefaultIgnoreShutdown";
+  const fs::path dir = fs::temp_directory_path() / ("svslam_lcmoff_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  // exec: the pid is svslam's own, for the SIGTERM below.
+  const pid_t run = spawn("exec " + std::string(SVSLAM_CLI) +
+                          " run --source synthetic:width=320,height=240,frames=2000 --rate 20"
+                          " --lcm-url '" +
+                          kUrl + "' --out " + (dir / "out").string() + " > " +
+                          (dir / "run_out.txt").string() + " 2>&1");
+  LcmParams p;
+  p.url = kUrl;
+  auto link = LcmLink::open(p);
+  ASSERT_TRUE(link.isOk()) << link.status().message();
+  std::this_thread::sleep_for(1500ms);  // the run is up and listening
+  sendFor(**link, {0, 1, CommandKind::kShutdown, "", kToken}, 2000ms);
+  EXPECT_TRUE(running(run)) << "a shutdown stopped a run whose commands are disabled";
+  ::kill(run, SIGTERM);
+  const int rc = waitExit(run, std::chrono::seconds(30));
+  EXPECT_EQ(rc, 0) << slurp(dir / "run_out.txt");
+  const std::string stats = slurp(dir / "out" / "stats.json");
+  EXPECT_GE(jsonCount(stats, "disabled"), 5) << stats;
+  EXPECT_EQ(jsonCount(stats, "accepted"), 0) << stats;
+  EXPECT_NE(stats.find("\"enabled\": false"), std::string::npos) << stats;
+  fs::remove_all(dir);
+}
+
+TEST(LcmPipeline, CommandsDisabledByDefaultIgnoreShutdown) {
+  runInNamespace("CommandsDisabledByDefaultIgnoreShutdown");
+}
+
+// Commands enabled and the token file missing, empty or open to others: exit 1 before the run
+// starts, naming the file.
+TEST(LcmPipeline, RunRefusesToStartWithoutAUsableTokenFile) {
+  const fs::path dir = fs::temp_directory_path() / ("svslam_lcmbad_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string cfg = writeCommandConfig(dir);
+  const fs::path token = dir / "command.token";
+  auto start = [&](std::string& err) {
+    const int rc = test::runSvslam("run --config " + cfg +
+                                       " --source synthetic:width=320,height=240,frames=3"
+                                       " --lcm-url memq:// --out " +
+                                       (dir / "out").string(),
+                                   dir / "out.txt", dir / "err.txt");
+    err = slurp(dir / "err.txt");
+    return rc;
+  };
+  std::string err;
+  EXPECT_EQ(start(err), 0) << err;  // the valid file
+  ::chmod(token.c_str(), 0644);
+  EXPECT_NE(start(err), 0);
+  EXPECT_NE(err.find(token.string()), std::string::npos) << err;
+  EXPECT_NE(err.find("readable by the service alone"), std::string::npos) << err;
+  std::ofstream(token, std::ios::trunc).close();
+  ::chmod(token.c_str(), 0600);
+  EXPECT_NE(start(err), 0);
+  EXPECT_NE(err.find("empty"), std::string::npos) << err;
+  fs::remove(token);
+  EXPECT_NE(start(err), 0);
+  EXPECT_NE(err.find(token.string()), std::string::npos) << err;
+  EXPECT_NE(err.find("cannot open"), std::string::npos) << err;
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // systemd/svslam.service: `systemd-analyze verify` must pass with no output on stderr (unknown
 // keys and bad values only warn with exit 0, so any stderr line is a failure), and the offline
-// security review must score the sandboxing below 5.0 ("OK" or better).
+// security review must score the exposure at most 2.0 (docs/service.md lists what is left and
+// why).
 //
 // The unit's ExecStart names the installed binary (/usr/local/bin/svslam), which verify requires
 // to exist: the test checks a copy whose ExecStart names the built svslam (SVSLAM_CLI) instead.
@@ -53,8 +54,8 @@ struct CommandResult {
 CommandResult run(const std::string& command, const fs::path& dir) {
   const fs::path out = dir / "stdout.txt";
   const fs::path err = dir / "stderr.txt";
-  const std::string full = "SYSTEMD_COLORS=0 SYSTEMD_PAGER= " + command + " >" + out.string() +
-                           " 2>" + err.string();
+  const std::string full =
+      "SYSTEMD_COLORS=0 SYSTEMD_PAGER= " + command + " >" + out.string() + " 2>" + err.string();
   const int status = std::system(full.c_str());
   CommandResult r;
   if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
@@ -109,14 +110,20 @@ class SystemdUnit : public ::testing::Test {
 TEST_F(SystemdUnit, DeclaresTheServiceLifeCycle) {
   EXPECT_NE(text_.find(kExecStart), std::string::npos)
       << "ExecStart must name where `cmake --install` puts svslam with the default prefix";
-  for (const char* key : {"Type=notify", "NotifyAccess=main", "WatchdogSec=10",
-                          "Restart=on-failure", "RestartSec=2", "TimeoutStopSec=20",
-                          "KillSignal=SIGTERM", "StateDirectory=svslam", "ProtectSystem=strict",
-                          "StandardOutput=journal", "StandardError=journal"}) {
+  for (const char* key :
+       {"Type=notify", "NotifyAccess=main", "WatchdogSec=10", "Restart=on-failure", "RestartSec=2",
+        "TimeoutStopSec=20", "KillSignal=SIGTERM", "StateDirectory=svslam", "ProtectSystem=strict",
+        "StandardOutput=journal", "StandardError=journal"}) {
     EXPECT_NE(text_.find(std::string("\n") + key + "\n"), std::string::npos) << key;
   }
   // SCHED_FIFO stage threads must stay possible.
   EXPECT_EQ(text_.find("\nRestrictRealtime="), std::string::npos);
+  // Cameras (V4L2, media controller, libcamera's DMA heaps) and LCM multicast stay reachable.
+  for (const char* key : {"DeviceAllow=char-video4linux rw", "DeviceAllow=char-media rw",
+                          "DeviceAllow=char-dma_heap rw", "SupplementaryGroups=video"})
+    EXPECT_NE(text_.find(std::string("\n") + key + "\n"), std::string::npos) << key;
+  EXPECT_NE(text_.find("\nRestrictAddressFamilies=AF_UNIX AF_INET"), std::string::npos);
+  EXPECT_EQ(text_.find("\nPrivateNetwork=yes"), std::string::npos);
 }
 
 TEST_F(SystemdUnit, VerifiesWithoutWarnings) {
@@ -138,7 +145,7 @@ TEST_F(SystemdUnit, VerifiesWithoutWarnings) {
   EXPECT_EQ(unexpected, "") << "systemd-analyze verify printed warnings";
 }
 
-TEST_F(SystemdUnit, SecurityExposureBelow5) {
+TEST_F(SystemdUnit, SecurityExposureAtMost2) {
   if (!haveSystemdAnalyze()) GTEST_SKIP() << "systemd-analyze not installed (package systemd)";
   if (std::string(SVSLAM_CLI).empty() || !fs::exists(SVSLAM_CLI)) {
     GTEST_SKIP() << "the svslam binary is not built (SVSLAM_CLI='" << SVSLAM_CLI << "')";
@@ -157,7 +164,7 @@ TEST_F(SystemdUnit, SecurityExposureBelow5) {
   std::printf("%s%s\n", marker.c_str(), rest.substr(0, rest.find('\n')).c_str());
   const double score = std::strtod(rest.c_str(), nullptr);
   EXPECT_GT(score, 0.0) << rest;
-  EXPECT_LT(score, 5.0) << r.out;
+  EXPECT_LE(score, 2.0) << r.out;
 }
 
 }  // namespace

@@ -202,3 +202,24 @@ TEST(ConfigReader, TypedReads) {
   EXPECT_EQ(absent, 5);  // absent keys leave the value alone
   EXPECT_TRUE(r->finish().isOk());
 }
+
+TEST(RunConfig, LcmCommandsAreOffByDefaultAndNeedATokenFile) {
+  RunConfig d;
+  EXPECT_FALSE(d.lcm.commands.enabled);
+  EXPECT_EQ(d.lcm.commands.token_file, "");
+  EXPECT_EQ(d.lcm.commands.max_per_s, 10.0);
+  RunConfig c;
+  ASSERT_TRUE(parseRunConfig("lcm: {commands: {enabled: true, token_file: /run/t, max_per_s: 2}}\n",
+                             "t.yaml", c)
+                  .isOk());
+  EXPECT_TRUE(c.lcm.commands.enabled);
+  EXPECT_EQ(c.lcm.commands.token_file, "/run/t");
+  EXPECT_EQ(c.lcm.commands.max_per_s, 2.0);
+  EXPECT_NE(errorOf("lcm: {commands: {enabled: true}}\n").find("lcm.commands.token_file"),
+            std::string::npos)
+      << errorOf("lcm: {commands: {enabled: true}}\n");
+  EXPECT_NE(errorOf("lcm: {commands: {max_per_s: 0}}\n").find("'lcm.commands.max_per_s'"),
+            std::string::npos);
+  EXPECT_NE(errorOf("lcm: {commands: {token: abc}}\n").find("lcm.commands.token"),
+            std::string::npos);  // unknown key: the token never goes in the config
+}

@@ -154,6 +154,7 @@ TEST(LcmMessages, CommandsParseAndUnknownIsNamed) {
     c.seq = 9;
     c.kind = k;
     c.argument = k == CommandKind::kSaveMap ? "/tmp/map.bin" : "";
+    c.token = "shared-token-42";
     auto m = toLcm(c);
     ASSERT_TRUE(m.isOk());
     auto back = fromLcm(roundTripBytes(*m));
@@ -161,6 +162,7 @@ TEST(LcmMessages, CommandsParseAndUnknownIsNamed) {
     EXPECT_EQ(back->kind, k);
     EXPECT_EQ(back->seq, 9);
     EXPECT_EQ(back->argument, c.argument);
+    EXPECT_EQ(back->token, c.token);
   }
   svslam_lcm::command_t m;
   m.utime = 0;
@@ -228,18 +230,49 @@ TEST(LcmMessages, StereoImageRejectsEachInconsistency) {
   };
   auto m = sampleImage(16, 8, 16);
   ASSERT_TRUE(validateStereoImage(m).isOk());
-  auto b = m; b.stride = 15; expectBad(b, "stride < width");
-  b = m; b.left_size -= 1; expectBad(b, "left_size");
-  b = m; b.right.pop_back(); expectBad(b, "right bytes");
-  b = m; b.width = 0; expectBad(b, "zero width");
-  b = m; b.f_px = NAN; expectBad(b, "NaN focal");
-  b = m; b.baseline_m = -0.1; expectBad(b, "negative baseline");
-  b = m; b.cx_px = 16.0; expectBad(b, "cx outside");
-  b = m; b.cy_px = -1.0; expectBad(b, "cy outside");
+  auto b = m;
+  b.stride = 15;
+  expectBad(b, "stride < width");
+  b = m;
+  b.left_size -= 1;
+  expectBad(b, "left_size");
+  b = m;
+  b.right.pop_back();
+  expectBad(b, "right bytes");
+  b = m;
+  b.width = 0;
+  expectBad(b, "zero width");
+  b = m;
+  b.f_px = NAN;
+  expectBad(b, "NaN focal");
+  b = m;
+  b.baseline_m = -0.1;
+  expectBad(b, "negative baseline");
+  b = m;
+  b.cx_px = 16.0;
+  expectBad(b, "cx outside");
+  b = m;
+  b.cy_px = -1.0;
+  expectBad(b, "cy outside");
+}
+
+TEST(LcmMessages, StatsCarryTheCommandCounts) {
+  StatsReport r;
+  r.commands.accepted = 3;
+  for (int k = 0; k < kNumCommandRefusals; ++k) r.commands.refused[k] = 10 + k;
+  auto m = toLcm(r);
+  ASSERT_TRUE(m.isOk()) << m.status().message();
+  EXPECT_EQ(m->commands_refused_bad_token, 12);
+  auto back = fromLcm(roundTripBytes(*m));
+  ASSERT_TRUE(back.isOk()) << back.status().message();
+  EXPECT_EQ(back->commands.accepted, 3);
+  EXPECT_EQ(back->commands.refused, r.commands.refused);
+  r.commands.refused[1] = -1;
+  EXPECT_FALSE(toLcm(r).isOk());
 }
 
 TEST(LcmMessages, TruncatedGarbageAndLyingCountsAreRejectedWithoutThrowing) {
-  auto cmd = toLcm(Command{1, 2, CommandKind::kPause, "x"}).value();
+  auto cmd = toLcm(Command{1, 2, CommandKind::kPause, "x", ""}).value();
   std::vector<std::uint8_t> buf;
   ASSERT_TRUE(encodeLcm(cmd, buf).isOk());
   svslam_lcm::command_t out;

@@ -12,7 +12,9 @@
 #include <filesystem>
 #include <limits>
 #include <mutex>
+#include <string>
 #include <thread>
+#include <utility>
 
 namespace svslam::drivers {
 namespace {
@@ -25,13 +27,23 @@ LcmParams memq() {
   return p;
 }
 
+const char* kToken = "0123456789abcdef-test-token";
+
+// A gate that accepts commands carrying kToken (up to 1000 per second).
+CommandGate openGate() { return CommandGate(true, kToken, 1000.0); }
+
+Command cmd(TimeNs t_ns, std::int64_t seq, CommandKind kind, std::string arg = "",
+            std::string token = kToken) {
+  return {t_ns, seq, kind, std::move(arg), std::move(token)};
+}
+
 PoseReport pose(std::int64_t seq) {
   PoseReport r;
   r.seq = seq;
   r.t_ns = 1'000'000'000 + seq * 50'000'000;
   r.publish_t_ns = r.t_ns + 3'000'000;
-  r.T_world_cam.linear() = Eigen::AngleAxisd(0.01 * double(seq), Eigen::Vector3d::UnitY())
-                               .toRotationMatrix();
+  r.T_world_cam.linear() =
+      Eigen::AngleAxisd(0.01 * double(seq), Eigen::Vector3d::UnitY()).toRotationMatrix();
   r.T_world_cam.translation() = Eigen::Vector3d(0.1 * double(seq), -1.0, 2.0);
   for (int i = 0; i < 6; ++i) r.cov(i, i) = 1e-4 * double(i + 1 + seq);
   r.cov(0, 3) = r.cov(3, 0) = 1e-6;
@@ -105,10 +117,10 @@ TEST(LcmTransport, MemqPoseReachesSubscriberWithCovariance) {
 }
 
 TEST(LcmTransport, CommandsArriveThroughPollAndGarbageIsCountedAndIgnored) {
-  auto link = LcmLink::open(memq());
+  auto link = LcmLink::open(memq(), openGate());
   ASSERT_TRUE(link.isOk());
   LcmLink& l = **link;
-  ASSERT_TRUE(l.publishCommand({10, 1, CommandKind::kPause, ""}).isOk());
+  ASSERT_TRUE(l.publishCommand(cmd(10, 1, CommandKind::kPause)).isOk());
   const std::uint8_t garbage[] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
   ASSERT_TRUE(l.publishRaw("SVSLAM_COMMAND", garbage, sizeof garbage).isOk());
   ASSERT_TRUE(l.publishRaw("SVSLAM_COMMAND", garbage, 3).isOk());  // truncated
@@ -119,7 +131,7 @@ TEST(LcmTransport, CommandsArriveThroughPollAndGarbageIsCountedAndIgnored) {
   std::vector<std::uint8_t> buf;
   ASSERT_TRUE(encodeLcm(unknown, buf).isOk());
   ASSERT_TRUE(l.publishRaw("SVSLAM_COMMAND", buf.data(), buf.size()).isOk());
-  ASSERT_TRUE(l.publishCommand({20, 3, CommandKind::kSaveMap, "/tmp/m.bin"}).isOk());
+  ASSERT_TRUE(l.publishCommand(cmd(20, 3, CommandKind::kSaveMap, "/tmp/m.bin")).isOk());
 
   std::vector<Command> got;
   const auto t0 = Clock::now();
@@ -140,8 +152,62 @@ TEST(LcmTransport, CommandsArriveThroughPollAndGarbageIsCountedAndIgnored) {
   EXPECT_GE(Clock::now() - t1, std::chrono::milliseconds(55));
 }
 
+// Polls until `n` commands were handled (accepted or refused) or 2 s passed.
+std::vector<Command> pollAll(LcmLink& l, std::int64_t n) {
+  std::vector<Command> got;
+  const auto t0 = Clock::now();
+  auto handled = [&] {
+    const CommandCounts c = l.commandCounts();
+    return c.accepted + c.refusedTotal();
+  };
+  while (handled() < n && Clock::now() - t0 < std::chrono::seconds(2))
+    EXPECT_TRUE(l.pollCommands(50, got).isOk());
+  EXPECT_TRUE(l.pollCommands(0, got).isOk());
+  return got;
+}
+
+TEST(LcmTransport, CommandsAreRefusedByDefaultAndCounted) {
+  auto link = LcmLink::open(memq());  // default gate: commands disabled
+  ASSERT_TRUE(link.isOk());
+  LcmLink& l = **link;
+  ASSERT_TRUE(l.publishCommand(cmd(0, 1, CommandKind::kShutdown)).isOk());
+  ASSERT_TRUE(l.publishCommand(cmd(0, 2, CommandKind::kShutdown, "", "")).isOk());
+  const std::vector<Command> got = pollAll(l, 2);
+  EXPECT_TRUE(got.empty());
+  const CommandCounts c = l.commandCounts();
+  EXPECT_EQ(c.accepted, 0);
+  EXPECT_EQ(c.refusedBy(CommandRefusal::kDisabled), 2);
+  EXPECT_EQ(c.refusedTotal(), 2);
+  EXPECT_EQ(l.lastRefused(), "disabled: shutdown seq 2");
+}
+
+TEST(LcmTransport, RefusedCommandsAreCountedByReason) {
+  auto link = LcmLink::open(memq(), CommandGate(true, kToken, 2.0));  // burst of 2
+  ASSERT_TRUE(link.isOk());
+  LcmLink& l = **link;
+  ASSERT_TRUE(l.publishCommand(cmd(0, 1, CommandKind::kShutdown, "", "")).isOk());
+  ASSERT_TRUE(l.publishCommand(cmd(0, 2, CommandKind::kShutdown, "", "wrong")).isOk());
+  ASSERT_TRUE(l.publishCommand(cmd(0, 3, CommandKind::kPause)).isOk());
+  ASSERT_TRUE(l.publishCommand(cmd(0, 4, CommandKind::kResume)).isOk());
+  ASSERT_TRUE(l.publishCommand(cmd(0, 5, CommandKind::kReset)).isOk());  // over the burst
+  const std::uint8_t garbage[] = {1, 2, 3};
+  ASSERT_TRUE(l.publishRaw("SVSLAM_COMMAND", garbage, sizeof garbage).isOk());
+  const std::vector<Command> got = pollAll(l, 6);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].seq, 3);
+  EXPECT_EQ(got[1].seq, 4);
+  const CommandCounts c = l.commandCounts();
+  EXPECT_EQ(c.accepted, 2);
+  EXPECT_EQ(c.refusedBy(CommandRefusal::kDisabled), 0);
+  EXPECT_EQ(c.refusedBy(CommandRefusal::kNoToken), 1);
+  EXPECT_EQ(c.refusedBy(CommandRefusal::kBadToken), 1);
+  EXPECT_EQ(c.refusedBy(CommandRefusal::kRateLimited), 1);
+  EXPECT_EQ(c.refusedBy(CommandRefusal::kMalformed), 1);
+  EXPECT_EQ(l.lastRefused().find("wrong"), std::string::npos);  // never a token in the log
+}
+
 TEST(LcmTransport, PublishingWhileAnotherThreadPollsIsNotBlocked) {
-  auto link = LcmLink::open(memq());
+  auto link = LcmLink::open(memq(), openGate());
   ASSERT_TRUE(link.isOk());
   LcmLink& l = **link;
   PoseSink sink;
@@ -158,7 +224,7 @@ TEST(LcmTransport, PublishingWhileAnotherThreadPollsIsNotBlocked) {
     ASSERT_TRUE(l.publishPose(pose(i)).isOk());
     worst = std::max(worst, Clock::now() - t);
     if (i == kPoses / 2) {
-      ASSERT_TRUE(l.publishCommand({0, 77, CommandKind::kReset, ""}).isOk());
+      ASSERT_TRUE(l.publishCommand(cmd(0, 77, CommandKind::kReset)).isOk());
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
@@ -213,7 +279,7 @@ TEST(LcmTransport, UdpmInnerPublisherSubscriberPair) {
   LcmParams p;  // default udpm URL, ttl=0
   auto pub = LcmLink::open(p);
   ASSERT_TRUE(pub.isOk()) << pub.status().message();
-  auto sub = LcmLink::open(p);
+  auto sub = LcmLink::open(p, openGate());
   ASSERT_TRUE(sub.isOk()) << sub.status().message();
   PoseSink sink;
   ASSERT_TRUE((*sub)->subscribeRaw("SVSLAM_POSE", sink.handler()).isOk());
@@ -239,7 +305,7 @@ TEST(LcmTransport, UdpmInnerPublisherSubscriberPair) {
     ASSERT_TRUE((*pub)->publishPose(pose(i)).isOk());
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
-  ASSERT_TRUE((*pub)->publishCommand({0, 5, CommandKind::kShutdown, ""}).isOk());
+  ASSERT_TRUE((*pub)->publishCommand(cmd(0, 5, CommandKind::kShutdown)).isOk());
   const auto t0 = Clock::now();
   while ((sink.size() < kPoses || noCommand()) && Clock::now() - t0 < std::chrono::seconds(3))
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -258,8 +324,8 @@ TEST(LcmTransport, UdpmOverLoopbackMulticast) {
   const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
   const std::string cmd =
       "unshare -rn sh -c 'ip link set lo up && ip route add 239.0.0.0/8 dev lo && "
-      "SVSLAM_LCM_UDPM_INNER=1 exec \"" + self +
-      "\" --gtest_filter=LcmTransport.UdpmInnerPublisherSubscriberPair'";
+      "SVSLAM_LCM_UDPM_INNER=1 exec \"" +
+      self + "\" --gtest_filter=LcmTransport.UdpmInnerPublisherSubscriberPair'";
   const int rc = std::system(cmd.c_str());
   EXPECT_EQ(rc, 0) << "inner udpm test failed (output above): " << cmd;
 }
