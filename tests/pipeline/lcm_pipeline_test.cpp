@@ -228,10 +228,12 @@ TEST(LcmPipeline, InnerCommandsAreAppliedAndAnswered) {
   std::thread rx([&] {
     while (!stop.load()) (void)(*link)->handle(50);
   });
-  auto send = [&](CommandKind k, std::int64_t seq, const std::string& arg = "") {
-    // Resend until answered (the run may not be listening yet), at most 20 s.
+  // Resend until answered (the run may not be listening yet), at most `wait`. A resend of the
+  // same seq replaces a pending request, it does not queue another.
+  auto send = [&](CommandKind k, std::int64_t seq, const std::string& arg = "",
+                  std::chrono::seconds wait = 20s) {
     const auto t0 = std::chrono::steady_clock::now();
-    while (!sink.has(seq) && std::chrono::steady_clock::now() - t0 < 20s) {
+    while (!sink.has(seq) && std::chrono::steady_clock::now() - t0 < wait) {
       (void)(*link)->publishCommand({0, seq, k, arg, kToken});
       std::this_thread::sleep_for(300ms);
     }
@@ -243,7 +245,10 @@ TEST(LcmPipeline, InnerCommandsAreAppliedAndAnswered) {
   const CommandStatus resumed = send(CommandKind::kResume, 2);
   EXPECT_EQ(resumed.command, "resume");
   const std::string map_path = (dir / "saved_map.ply").string();
-  const CommandStatus saved = send(CommandKind::kSaveMap, 3, map_path);
+  // The answer comes once the mapper has written the elevation map files too (and, for the
+  // synthetic source, the exact terrain under every cell seen so far): slow under ThreadSanitizer
+  // on busy cores, where the mapper thread (nice +10) yields to the others.
+  const CommandStatus saved = send(CommandKind::kSaveMap, 3, map_path, 120s);
   EXPECT_EQ(saved.command, "save_map");
   EXPECT_TRUE(saved.ok) << saved.message;
   EXPECT_TRUE(fs::exists(map_path));
