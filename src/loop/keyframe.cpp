@@ -1,0 +1,147 @@
+#include "loop/keyframe.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "odometry/stereo_stage.hpp"
+
+namespace svslam {
+
+Eigen::Matrix3d Keyframe::cov(std::size_t i) const {
+  const auto& c = cov_cam[i];
+  Eigen::Matrix3d m;
+  m << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
+  return m;
+}
+
+std::size_t Keyframe::bytes() const {
+  return sizeof(Keyframe) + descriptors.capacity() * sizeof(OrbDescriptor) +
+         p_cam.capacity() * sizeof(Eigen::Vector3f) +
+         cov_cam.capacity() * sizeof(std::array<float, 6>) +
+         uv_px.capacity() * sizeof(Eigen::Vector2f) + bow.capacity() * sizeof(bow[0]);
+}
+
+OrbParams KeyframeParams::defaultOrb() {
+  OrbParams p;
+  p.grid_cols = 8;
+  p.grid_rows = 6;
+  p.max_per_cell = 16;
+  p.fast_threshold = 15;
+  return p;
+}
+
+Status KeyframeParams::validate() const {
+  if (!(travel_depth_fraction > 0) || !std::isfinite(travel_depth_fraction))
+    return Status::invalidArgument("loop.keyframe travel_depth_fraction must be > 0");
+  if (!(min_travel_m >= 0) || !std::isfinite(min_travel_m))
+    return Status::invalidArgument("loop.keyframe min_travel_m must be >= 0");
+  if (!(min_rotation_deg > 0 && min_rotation_deg <= 180))
+    return Status::invalidArgument("loop.keyframe min_rotation_deg must be in (0, 180]");
+  if (max_points < 16 || max_points > 2000)
+    return Status::invalidArgument("loop.keyframe max_points must be in 16..2000");
+  if (!(max_point_sigma_m > 0) || !std::isfinite(max_point_sigma_m))
+    return Status::invalidArgument("loop.keyframe max_point_sigma_m must be > 0");
+  if (!(matching_error_px > 0) || !std::isfinite(matching_error_px))
+    return Status::invalidArgument("loop.keyframe matching_error_px must be > 0");
+  return orb.validate();
+}
+
+bool KeyframeSelector::isKeyframe(const Eigen::Isometry3d& T_world_cam) const {
+  if (!has_last_) return true;
+  const Eigen::Isometry3d T_last_cam = T_world_last_.inverse() * T_world_cam;
+  const double travel_m = T_last_cam.translation().norm();
+  const double angle_deg =
+      Eigen::AngleAxisd(T_last_cam.linear()).angle() * 180.0 / 3.14159265358979323846;
+  const double need_m = std::max(params_.min_travel_m, params_.travel_depth_fraction * median_depth_m_);
+  return travel_m >= need_m || angle_deg >= params_.min_rotation_deg;
+}
+
+void KeyframeSelector::accept(const Eigen::Isometry3d& T_world_cam, double median_depth_m) {
+  has_last_ = true;
+  T_world_last_ = T_world_cam;
+  median_depth_m_ = median_depth_m;
+}
+
+KeyframeBuilder::KeyframeBuilder(const KeyframeParams& params, const StereoCalibration& calib)
+    : params_(params), calib_(calib) {
+  init_status_ = params.validate();
+  if (init_status_) init_status_ = calib.validate();
+  if (!init_status_) return;
+  orb_ = std::make_unique<OrbExtractor>(params.orb, calib.width, calib.height);
+  init_status_ = orb_->initStatus();
+  const std::size_t cap =
+      static_cast<std::size_t>(params.orb.grid_cols * params.orb.grid_rows * params.orb.max_per_cell);
+  kp_.reserve(cap);
+  desc_.reserve(cap);
+  order_.reserve(cap);
+  depths_.reserve(cap);
+}
+
+Status KeyframeBuilder::process(ImageView<const std::uint8_t> left, const DisparityResult& dense,
+                                Keyframe& out) {
+  if (!init_status_) return init_status_;
+  if (left.width != calib_.width || left.height != calib_.height ||
+      dense.disparity_px.width() != calib_.width || dense.disparity_px.height() != calib_.height)
+    return Status::invalidArgument("keyframe: image or disparity size differs from the calibration");
+  if (Status s = orb_->process(left, kp_, desc_); !s) return s;
+  // Round-robin over the ORB cells: the r-th strongest of every cell before any (r+1)-th.
+  const int cols = params_.orb.grid_cols, rows = params_.orb.grid_rows;
+  std::vector<int>& order = order_;
+  order.clear();
+  {
+    // kp_ is cell by cell, strongest first: rank within the cell.
+    std::vector<std::pair<int, int>> rank_index;  // small (<= cells * max_per_cell)
+    rank_index.reserve(kp_.size());
+    int prev_cell = -1, rank = 0;
+    for (std::size_t i = 0; i < kp_.size(); ++i) {
+      const int cx = std::clamp(static_cast<int>(std::floor(kp_[i].x_px * cols / calib_.width)), 0,
+                                cols - 1);
+      const int cy = std::clamp(static_cast<int>(std::floor(kp_[i].y_px * rows / calib_.height)),
+                                0, rows - 1);
+      const int cell = cy * cols + cx;
+      rank = cell == prev_cell ? rank + 1 : 0;
+      prev_cell = cell;
+      rank_index.emplace_back(rank, static_cast<int>(i));
+    }
+    std::stable_sort(rank_index.begin(), rank_index.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (const auto& ri : rank_index) order.push_back(ri.second);
+  }
+  out.descriptors.clear();
+  out.p_cam.clear();
+  out.cov_cam.clear();
+  out.uv_px.clear();
+  out.bow.clear();
+  depths_.clear();
+  const std::size_t max_points = static_cast<std::size_t>(params_.max_points);
+  out.descriptors.reserve(max_points);
+  out.p_cam.reserve(max_points);
+  out.cov_cam.reserve(max_points);
+  out.uv_px.reserve(max_points);
+  for (int i : order) {
+    if (out.descriptors.size() >= max_points) break;
+    const OrbKeypoint& k = kp_[static_cast<std::size_t>(i)];
+    StereoPoint p;
+    if (!stereoObservation(calib_, &dense, k.x_px, k.y_px, 0.0f, 0.0f, params_.matching_error_px,
+                           p))
+      continue;
+    if (!p.p_cam.allFinite() || !p.cov.allFinite() || !(p.p_cam.z() > 0)) continue;
+    if (std::sqrt(p.cov.trace()) > params_.max_point_sigma_m) continue;
+    out.descriptors.push_back(desc_[static_cast<std::size_t>(i)]);
+    out.p_cam.push_back(p.p_cam.cast<float>());
+    const Eigen::Matrix3d& c = p.cov;
+    out.cov_cam.push_back({static_cast<float>(c(0, 0)), static_cast<float>(c(0, 1)),
+                           static_cast<float>(c(0, 2)), static_cast<float>(c(1, 1)),
+                           static_cast<float>(c(1, 2)), static_cast<float>(c(2, 2))});
+    out.uv_px.emplace_back(k.x_px, k.y_px);
+    depths_.push_back(static_cast<float>(p.p_cam.z()));
+  }
+  if (out.descriptors.size() < 16)
+    return Status::failedPrecondition("keyframe: fewer than 16 ORB points with a valid disparity");
+  auto mid = depths_.begin() + static_cast<std::ptrdiff_t>(depths_.size() / 2);
+  std::nth_element(depths_.begin(), mid, depths_.end());
+  out.median_depth_m = *mid;
+  return Status::ok();
+}
+
+}  // namespace svslam
