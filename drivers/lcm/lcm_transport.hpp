@@ -44,6 +44,7 @@ struct LcmParams {
   std::string stats_channel = "SVSLAM_STATS";
   std::string map_channel = "SVSLAM_MAP";
   std::string map_tile_channel = "SVSLAM_MAP_TILE";
+  std::string correction_channel = "SVSLAM_POSE_CORRECTION";
   std::string command_channel = "SVSLAM_COMMAND";
   std::string status_channel = "SVSLAM_COMMAND_STATUS";
 

@@ -376,7 +376,8 @@ int runPipeline(const std::vector<std::string>& args) {
   if (Status s =
           run::writeFileAtomic(out_dir + "/" + run::files::kStats,
                                run::statsJson(cfg, source_spec, summary, work.outputs(), times, rep,
-                                              error, work.mapJson(rep.after_publish_skipped)));
+                                              error, work.mapJson(rep.after_publish_skipped),
+                                              work.loopJson()));
       !s)
     return fail(s);
   if (!error.empty()) return fail(Status::ioError(error));

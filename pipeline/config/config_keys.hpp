@@ -55,6 +55,7 @@ struct ConfigSection {
 std::vector<ConfigSection> runConfigSections();
 ConfigSection slamConfigSection();
 ConfigSection mapConfigSection();
+ConfigSection loopConfigSection();
 std::vector<ConfigSection> pipelineConfigSections();
 const std::vector<ConfigSection>& allConfigSections();
 

@@ -75,6 +75,8 @@ ConfigSection lcmSection() {
            "svslam_lcm.map_summary_t, every stats_period_s (ekf mode)"),
       text("map_tile_channel", SVSLAM_FIELD(lcm.params.map_tile_channel),
            "svslam_lcm.map_tile_t, the elevation map tiles changed, every map.publish_period_s"),
+      text("correction_channel", SVSLAM_FIELD(lcm.params.correction_channel),
+           "svslam_lcm.pose_correction_t, after each loop closure (loop.enabled)"),
       text("command_channel", SVSLAM_FIELD(lcm.params.command_channel),
            "svslam_lcm.command_t: reset | save_map | pause | resume | shutdown (see "
            "lcm.commands)"),

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "core/status.hpp"
+#include "loop/loop_closer.hpp"
 #include "map/dem_params.hpp"
 #include "odometry/stereo_odometry.hpp"
 #include "pipeline/config/enum_names.hpp"
@@ -53,6 +54,11 @@ struct RunConfig {
   // altitude in metres) for georeferenced outputs; nullopt: the map stays in local metres.
   std::optional<std::array<double, 3>> map_geo_origin;
   double map_publish_period_s = 1.0;  // map tiles changed since the last period go to LCM, s
+  // loop.*: loop closing (src/loop/loop_closer.hpp): keyframes, place recognition with the
+  // vocabulary file loop_vocabulary (`svslam train-vocabulary`), verification, PCM, pose graph.
+  bool loop_enabled = false;
+  std::string loop_vocabulary;
+  LoopCloserParams loop;
 };
 
 // Sets the worker threads and everything that follows them (the dense stereo stripes).

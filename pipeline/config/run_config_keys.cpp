@@ -255,7 +255,8 @@ ConfigSection odometry() {
 
 std::vector<ConfigSection> runConfigSections() {
   return {topLevel(),    detector(), orb(),      stereoMatch(),       temporalMatch(),   motion(),
-          denseStereo(), clusters(), odometry(), slamConfigSection(), mapConfigSection()};
+          denseStereo(), clusters(), odometry(), slamConfigSection(), mapConfigSection(),
+          loopConfigSection()};
 }
 
 const std::vector<RenamedKey>& renamedConfigKeys() {

@@ -61,6 +61,13 @@ Status SlamStages::init() {
     map_stage_ = std::make_unique<MapStage>(cfg_, source_, out_dir_, lcm_);
     if (Status s = map_stage_->init(estimator_->outputs().pose_covariance); !s) return s;
   }
+  if (cfg_.loop_enabled) {
+    if (!cfg_.odometry.dense)
+      return Status::invalidArgument(
+          "loop.enabled needs dense_stereo.enabled (keyframe points take their depth from it)");
+    loop_stage_ = std::make_unique<LoopStage>(cfg_, source_, out_dir_, lcm_);
+    if (Status s = loop_stage_->init(); !s) return s;
+  }
   Eigen::Isometry3d T;
   return publisher_->open(source_.groundTruth(0, T));
 }
@@ -73,8 +80,13 @@ StageGraph SlamStages::graph(EdgePolicy capture_input) {
   g.stages = {{"stereo", [this](FrameSlot& s) { return stereo(s); }, capture_input},
               {"estimator", [this](FrameSlot& s) { return estimate(s); }},
               {"publisher", [this](FrameSlot& s) { return publisher_->publish(s); }}};
-  if (map_stage_) {
-    StageSpec mapper{"mapper", [this](FrameSlot& s) { return map_stage_->process(s); },
+  if (map_stage_ || loop_stage_) {
+    StageSpec mapper{"mapper",
+                     [this](FrameSlot& s) {
+                       if (map_stage_)
+                         if (Status st = map_stage_->process(s); !st) return st;
+                       return loop_stage_ ? loop_stage_->process(s) : Status::ok();
+                     },
                      capture_input};
     mapper.after_publish = true;
     g.stages.push_back(std::move(mapper));
@@ -249,6 +261,10 @@ Status SlamStages::finish() {
     const Status ms = map_stage_->finish();
     if (s) s = ms;
   }
+  if (loop_stage_) {
+    const Status ls = loop_stage_->finish();
+    if (s) s = ls;
+  }
   return s;
 }
 
@@ -256,11 +272,16 @@ std::string SlamStages::mapJson(std::int64_t skipped_busy) const {
   return map_stage_ ? map_stage_->json(skipped_busy) : std::string();
 }
 
+std::string SlamStages::loopJson() const {
+  return loop_stage_ ? loop_stage_->json() : std::string();
+}
+
 run::StageTimes SlamStages::stageTimes() const {
   run::StageTimes t = capture_times_;
   t.merge(stereo_times_);
   t.merge(estimator_times_);
   if (map_stage_) t.merge(map_stage_->times());
+  if (loop_stage_) t.merge(loop_stage_->times());
   return t;
 }
 

@@ -8,7 +8,9 @@
 //   estimator  the Estimator of the configured mode (vo or ekf), one call per frame; commands
 //              that touch the map (reset, save_map) are applied here, between two frames;
 //   publisher  the run's outputs (run/run_publisher.hpp): files, the pose and stats on LCM;
-//   mapper     (map.enabled) after publication, the elevation map (realtime/map_stage.hpp).
+//   mapper     (map.enabled or loop.enabled) after publication: the elevation map
+//              (realtime/map_stage.hpp), then loop closing's keyframes (realtime/loop_stage.hpp,
+//              whose back end has a thread of its own).
 // Each stage is owned once, here; the runner owns the threads, edges and timing.
 #include <atomic>
 #include <memory>
@@ -21,6 +23,7 @@
 #include "odometry/stereo_stage.hpp"
 #include "pipeline/config/run_config.hpp"
 #include "pipeline/realtime/edges.hpp"
+#include "pipeline/realtime/loop_stage.hpp"
 #include "pipeline/realtime/map_stage.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
 #include "pipeline/run/run_outputs.hpp"
@@ -63,6 +66,8 @@ class SlamStages {
   std::string mapJson(std::int64_t skipped_busy) const;
   // The mapper (null when map.enabled is false); its map is the mapper thread's.
   const MapStage* mapStage() const { return map_stage_.get(); }
+  // stats.json's "loop" object (empty without loop closing).
+  std::string loopJson() const;
   // Warnings met while starting threads (scheduling not permitted), for the log.
   std::string takeWarnings();
 
@@ -109,6 +114,7 @@ class SlamStages {
   std::unique_ptr<run::RunPublisher> publisher_;
   // Mapper thread (null when map.enabled is false).
   std::unique_ptr<MapStage> map_stage_;
+  std::unique_ptr<LoopStage> loop_stage_;
   std::mutex warn_mutex_;
   std::string warnings_;
 };

@@ -35,9 +35,12 @@ inline constexpr const char* kOrthoPng = "ortho.png";
 inline constexpr const char* kHillshade = "dem_hillshade.png";
 inline constexpr const char* kGroundTruthDem = "groundtruth_dem.tif";
 inline constexpr const char* kLatency = "latency.txt";
+inline constexpr const char* kTrajectoryOptimizedKitti = "trajectory_optimized_kitti.txt";
+inline constexpr const char* kTrajectoryOptimizedTum = "trajectory_optimized_tum.txt";
 inline constexpr const char* kAll[] = {
     kTrajectoryKitti, kTrajectoryTum, kGroundTruthKitti, kPoseCovariance, kLandmarks, kStats, kDem,
-    kOrthoTiff,       kOrthoPng,      kHillshade,        kGroundTruthDem, kLatency};
+    kOrthoTiff,       kOrthoPng,      kHillshade,        kGroundTruthDem, kLatency,
+    kTrajectoryOptimizedKitti, kTrajectoryOptimizedTum};
 }  // namespace files
 
 // A run owns its output folder: removes from `dir` every file of files::kAll (and the

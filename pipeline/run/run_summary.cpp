@@ -51,7 +51,7 @@ std::string latency(const rt::LatencySummary& l) {
 std::string statsJson(const config::RunConfig& cfg, const std::string& source, const RunSummary& s,
                       EstimatorOutputs outputs, const StageTimes& times,
                       const rt::PipelineReport& pipeline, const std::string& error,
-                      const std::string& map_json) {
+                      const std::string& map_json, const std::string& loop_json) {
   JsonObject fails;
   for (const auto& [reason, n] : s.failure_counts) fails.add(reason, n);
   std::string list = "[";
@@ -123,6 +123,7 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
   p.addRaw("queues", queues);
   j.addRaw("pipeline", p.str());
   if (!map_json.empty()) j.addRaw("map", map_json);
+  if (!loop_json.empty()) j.addRaw("loop", loop_json);
   if (s.lcm_commands) {
     const drivers::CommandCounts& c = *s.lcm_commands;
     JsonObject refused;

@@ -42,6 +42,6 @@ struct RunSummary {
 std::string statsJson(const config::RunConfig& cfg, const std::string& source, const RunSummary& s,
                       EstimatorOutputs outputs, const StageTimes& times,
                       const rt::PipelineReport& pipeline, const std::string& error,
-                      const std::string& map_json = "");
+                      const std::string& map_json = "", const std::string& loop_json = "");
 
 }  // namespace svslam::run

@@ -1,0 +1,242 @@
+#include "pipeline/realtime/loop_stage.hpp"
+
+#include <cstdio>
+
+#include "pipeline/cli/json_writer.hpp"
+#include "pipeline/realtime/pipeline_runner.hpp"
+
+#ifdef SVSLAM_HAVE_CERES
+#include <readerwriterqueue/readerwritercircularbuffer.h>
+
+#include <mutex>
+
+#include "drivers/files/trajectory_io.hpp"
+#include "drivers/files/vocabulary_file.hpp"
+#include "drivers/lcm/lcm_pose_correction.hpp"
+#include "loop/loop_closer.hpp"
+#endif
+
+namespace svslam::rt {
+
+#ifdef SVSLAM_HAVE_CERES
+
+bool loopClosingAvailable() { return true; }
+
+namespace {
+struct KeyframeItem {
+  Keyframe kf;
+  Matrix6d odo_cov = Matrix6d::Zero();
+};
+constexpr std::size_t kRingKeyframes = 64;
+}  // namespace
+
+struct LoopStage::Impl {
+  Impl(const config::RunConfig& c, drivers::StereoSource& s, std::string dir,
+       drivers::LcmLink* l)
+      : cfg(c), source(s), out_dir(std::move(dir)), lcm(l), ring(kRingKeyframes) {}
+  const config::RunConfig& cfg;
+  drivers::StereoSource& source;
+  std::string out_dir;
+  drivers::LcmLink* lcm;
+  std::unique_ptr<BinaryVocabulary> vocabulary;
+  std::unique_ptr<LoopFrontEnd> front;
+  std::unique_ptr<LoopCloser> closer;
+  moodycamel::BlockingReaderWriterCircularBuffer<std::unique_ptr<KeyframeItem>> ring;
+  std::thread thread;
+  bool started = false;
+  bool closed = false;
+  // Back end (its thread; read after join).
+  Status error;
+  std::int64_t corrections_published = 0;
+  std::vector<Eigen::Isometry3d> last_sent;  // per keyframe, the correction last published
+  std::vector<double> solve_ms;
+  double vocabulary_load_ms = 0;
+  int vocabulary_words = 0;
+  std::int64_t frames_seen = 0;
+
+  void backEnd();
+  void publishCorrection(const Keyframe& kf);
+};
+
+void LoopStage::Impl::backEnd() {
+  for (;;) {
+    std::unique_ptr<KeyframeItem> item;
+    ring.wait_dequeue(item);
+    if (!item) return;  // end of the run
+    if (!error) {
+      const std::int64_t t_ns = item->kf.t_ns;
+      bool optimised = false;
+      const std::int64_t t0 = steadyNowNs();
+      const Status s = closer->process(std::move(item->kf), item->odo_cov, optimised);
+      if (!s) {
+        error = Status(s.code(), "loop closing, keyframe at t_ns " + std::to_string(t_ns) + ": " +
+                                     s.message());
+        continue;
+      }
+      if (optimised) {
+        solve_ms.push_back(static_cast<double>(steadyNowNs() - t0) * 1e-6);
+        if (lcm) publishCorrection(closer->keyframes().back());
+      }
+    }
+  }
+}
+
+void LoopStage::Impl::publishCorrection(const Keyframe& kf) {
+  const std::vector<Keyframe>& kfs = closer->keyframes();
+  const std::vector<Eigen::Isometry3d>& cor = closer->correctedKeyframes();
+  drivers::PoseCorrectionMessage m;
+  m.t_ns = kf.t_ns;
+  m.correction_seq = corrections_published;
+  m.loops_accepted = static_cast<int>(closer->acceptedLoops().size());
+  m.keyframes_total = static_cast<int>(kfs.size());
+  last_sent.resize(kfs.size(), Eigen::Isometry3d::Identity());
+  for (std::size_t k = 0; k < kfs.size(); ++k) {
+    const Eigen::Isometry3d C = cor[k] * kfs[k].T_world_cam.inverse();
+    const Eigen::Isometry3d d = last_sent[k].inverse() * C;
+    if (d.translation().norm() < 1e-4 && Eigen::AngleAxisd(d.linear()).angle() < 1e-6) continue;
+    m.keyframe_t_ns.push_back(kfs[k].t_ns);
+    m.correction.push_back(C);
+    last_sent[k] = C;
+  }
+  std::vector<std::uint8_t> bytes;
+  for (const drivers::PoseCorrectionMessage& part : drivers::splitPoseCorrection(m)) {
+    if (!drivers::encodePoseCorrection(part, bytes)) continue;
+    (void)lcm->publishRaw(cfg.lcm.params.correction_channel, bytes.data(), bytes.size());
+  }
+  ++corrections_published;
+}
+
+LoopStage::LoopStage(const config::RunConfig& cfg, drivers::StereoSource& source,
+                     std::string out_dir, drivers::LcmLink* lcm)
+    : impl_(std::make_unique<Impl>(cfg, source, std::move(out_dir), lcm)) {}
+
+LoopStage::~LoopStage() {
+  if (impl_->started && !impl_->closed) {
+    impl_->ring.wait_enqueue(nullptr);
+    impl_->closed = true;
+  }
+  if (impl_->thread.joinable()) impl_->thread.join();
+}
+
+Status LoopStage::init() {
+  Impl& m = *impl_;
+  if (m.cfg.loop_vocabulary.empty())
+    return Status::invalidArgument(
+        "loop.enabled needs loop.vocabulary (a file made by `svslam train-vocabulary`)");
+  const std::int64_t t0 = steadyNowNs();
+  auto voc = drivers::loadVocabulary(m.cfg.loop_vocabulary);
+  if (!voc) return Status(voc.status().code(), "loop.vocabulary: " + voc.status().message());
+  m.vocabulary_load_ms = static_cast<double>(steadyNowNs() - t0) * 1e-6;
+  m.vocabulary = std::make_unique<BinaryVocabulary>(std::move(*voc));
+  m.vocabulary_words = m.vocabulary->numWords();
+  LoopCloserParams p = m.cfg.loop;
+  p.verify.motion.seed = m.cfg.seed;
+  m.front = std::make_unique<LoopFrontEnd>(p, m.source.calibration());
+  if (Status s = m.front->initStatus(); !s) return s;
+  m.closer = std::make_unique<LoopCloser>(p, *m.vocabulary);
+  if (Status s = m.closer->initStatus(); !s) return s;
+  m.thread = std::thread([&m] { m.backEnd(); });
+  m.started = true;
+  return Status::ok();
+}
+
+Status LoopStage::process(FrameSlot& slot) {
+  Impl& m = *impl_;
+  const std::int64_t t0 = steadyNowNs();
+  ++m.frames_seen;
+  LoopFrameInput in;
+  in.frame = slot.frame.index;
+  in.t_ns = slot.frame.t_ns;
+  in.T_world_cam = slot.result.T_world_cam;
+  in.motion_valid = slot.result.odometry.tracked;
+  in.T_cur_prev = slot.result.odometry.T_cur_prev;
+  in.motion_cov = slot.result.odometry.covariance;
+  in.left = slot.frame.left.cview();
+  in.dense = slot.stereo.has_disparity ? &slot.stereo.disparity : nullptr;
+  auto item = std::make_unique<KeyframeItem>();
+  bool made = false;
+  if (Status s = m.front->process(in, made, item->kf, item->odo_cov); !s)
+    return Status(s.code(), "loop closing, frame " + std::to_string(slot.frame.index) + ": " +
+                                s.message());
+  if (made) {
+    times_.add("keyframe", static_cast<double>(steadyNowNs() - t0) * 1e-6);
+    m.ring.wait_enqueue(std::move(item));
+  }
+  return Status::ok();
+}
+
+Status LoopStage::finish() {
+  Impl& m = *impl_;
+  if (!m.started) return Status::ok();
+  if (!m.closed) {
+    m.ring.wait_enqueue(nullptr);
+    m.closed = true;
+  }
+  if (m.thread.joinable()) m.thread.join();
+  if (!m.error) return m.error;
+  // The published trajectory, every pose moved by the correction of its time.
+  auto traj = drivers::readTrajectory(m.out_dir + "/" + run::files::kTrajectoryTum);
+  if (!traj) return Status(traj.status().code(), "loop closing: " + traj.status().message());
+  run::TrajectoryWriter w;
+  if (Status s = w.open(m.out_dir + "/" + run::files::kTrajectoryOptimizedKitti,
+                        m.out_dir + "/" + run::files::kTrajectoryOptimizedTum);
+      !s)
+    return s;
+  for (std::size_t i = 0; i < traj->poses.size(); ++i) {
+    const Eigen::Isometry3d T = m.closer->correctionAt(traj->t_ns[i]) * traj->poses[i];
+    if (Status s = w.append(traj->t_ns[i], T); !s) return s;
+  }
+  w.close();
+  return Status::ok();
+}
+
+std::string LoopStage::json() const {
+  const Impl& m = *impl_;
+  JsonObject o;
+  if (!m.closer) return o.str();
+  const LoopCloserStats& st = m.closer->stats();
+  o.add("vocabulary_words", m.vocabulary_words);
+  o.add("vocabulary_load_ms", m.vocabulary_load_ms, 1);
+  o.add("frames_seen", m.frames_seen);
+  o.add("keyframes", st.keyframes);
+  o.add("place_candidates", st.candidates);
+  o.add("verified", st.verified);
+  o.add("rejected_verification", st.rejected_verification);
+  o.add("rejected_consistency", st.rejected_consistency);
+  o.add("loops_accepted", st.accepted);
+  o.add("optimisations", st.optimisations);
+  o.add("last_max_correction_m", st.last_max_correction_m, 4);
+  o.add("corrections_published", m.corrections_published);
+  double worst = 0;
+  for (double v : m.solve_ms) worst = std::max(worst, v);
+  o.add("back_end_max_ms", worst, 1);
+  o.add("memory_bytes", static_cast<std::int64_t>(m.closer->memoryBytes()));
+  std::string loops = "[";
+  for (const AcceptedLoop& a : m.closer->acceptedLoops()) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%s{\"query\": %d, \"candidate\": %d, \"inliers\": %d}",
+                  loops.size() > 1 ? ", " : "", a.query, a.candidate, a.inliers);
+    loops += buf;
+  }
+  o.addRaw("accepted", loops + "]");
+  return o.str();
+}
+
+#else  // no Ceres: loop closing is not built
+
+bool loopClosingAvailable() { return false; }
+struct LoopStage::Impl {};
+LoopStage::LoopStage(const config::RunConfig&, drivers::StereoSource&, std::string,
+                     drivers::LcmLink*) {}
+LoopStage::~LoopStage() = default;
+Status LoopStage::init() {
+  return Status::failedPrecondition(
+      "loop.enabled: this build has no loop closing (Ceres was not found when it was built)");
+}
+Status LoopStage::process(FrameSlot&) { return Status::ok(); }
+Status LoopStage::finish() { return Status::ok(); }
+std::string LoopStage::json() const { return "{}"; }
+
+#endif
+
+}  // namespace svslam::rt

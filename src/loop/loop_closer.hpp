@@ -1,0 +1,159 @@
+#pragma once
+// Loop closing (seed 000 "closing the loop", seed 002 sec 4): keyframes indexed by a binary
+// bag-of-words, candidates geometrically verified, accepted by pairwise consistency with the
+// odometry, and a pose graph over the keyframes re-solved after each accepted set of loops.
+// Two halves, each for one thread and both deterministic given the same frames in order:
+//
+// LoopFrontEnd (the thread that sees every published frame with its image and dense disparity):
+//   the keyframe rule (loop/keyframe.hpp), the keyframe's ORB points with 3D covariance, and the
+//   covariance of the relative pose since the previous keyframe, compounded from the frame-to-
+//   frame motion covariances of the front end (visual motion estimation, [dtheta, dt] of
+//   T_cur_prev): with Z = T_kf_prev_frame (C) and the frame's motion M = T_cur_prev (C_M),
+//     D = M^-1, C_D = J_inv C_M J_inv^T,   Z' = Z D,   C' = A_1 C A_1^T + A_2 C_D A_2^T
+//   (loop/relative_pose.hpp's inversion and product Jacobians), plus a floor of
+//   odometry_floor_rot_rad^2 / odometry_floor_trans_m^2 per keyframe edge (the filter's
+//   relative pose is not exactly the motion chain's, and a skipped frame adds nothing).
+//
+// LoopCloser (the back-end thread, one call per keyframe):
+//  1. BoW vector of the keyframe (loop/binary_vocabulary.hpp); place query (loop/place_database
+//     .hpp: inverted index, normalised score, islands, temporal consistency), then the keyframe
+//     is added;
+//  2. each returned candidate is verified (loop/loop_verifier.hpp); a verified constraint gives
+//     the loop edge from = query, to = candidate, T_from_to = T_query_candidate, covariance;
+//  3. PCM (loop/loop_consistency.hpp) over the verified constraints (the most recent
+//     max_pcm_candidates) against the odometry edges: the maximum clique is accepted when it has
+//     at least min_consistent_loops members (a lone look-alike is never enough);
+//  4. when the accepted set gained a member: the pose graph (loop/pose_graph.hpp; odometry edges
+//     between consecutive keyframes, loop edges with the robust loss, keyframe 0 fixed) is
+//     solved, warm-started from the last solution (new keyframes chained on by odometry).
+//  correctedKeyframes() then holds T_world_kf after the last solution (the online estimates
+//  before any); correctionAt() maps an online pose at any time into the corrected frame.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/image.hpp"
+#include "core/status.hpp"
+#include "loop/binary_vocabulary.hpp"
+#include "loop/keyframe.hpp"
+#include "loop/loop_consistency.hpp"
+#include "loop/loop_verifier.hpp"
+#include "loop/place_database.hpp"
+#include "loop/pose_graph.hpp"
+#include "stereo/dense_stereo.hpp"
+
+namespace svslam {
+
+struct LoopCloserParams {
+  KeyframeParams keyframe;
+  PlaceDatabaseParams place;
+  LoopVerifierParams verify;
+  LoopConsistencyParams consistency;
+  PoseGraphParams graph;
+  int min_consistent_loops = 2;       // PCM clique size before loops are used, >= 1
+  int max_pcm_candidates = 64;        // verified constraints kept for PCM (newest), 2..1000
+  double odometry_floor_rot_rad = 1e-4;   // per keyframe edge, rad, > 0
+  double odometry_floor_trans_m = 2e-3;   // per keyframe edge, m, > 0
+  Status validate() const;
+};
+
+// One frame as the front end sees it.
+struct LoopFrameInput {
+  std::int64_t frame = 0;
+  std::int64_t t_ns = 0;
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // online estimate
+  bool motion_valid = false;  // the front end estimated T_cur_prev for this frame
+  Eigen::Isometry3d T_cur_prev = Eigen::Isometry3d::Identity();
+  Matrix6d motion_cov = Matrix6d::Zero();  // [dtheta, dt] of T_cur_prev
+  ImageView<const std::uint8_t> left;      // rectified, calibration size
+  const DisparityResult* dense = nullptr;  // its dense disparity (required for a keyframe)
+};
+
+class LoopFrontEnd {
+ public:
+  LoopFrontEnd(const LoopCloserParams& params, const StereoCalibration& calib);
+  const Status& initStatus() const { return init_status_; }
+  // True in `made` when the frame became keyframe `kf` (with the odometry covariance since the
+  // previous keyframe in `odo_cov`, zero for the first). A frame without dense disparity or too
+  // few points is not a keyframe (not an error).
+  Status process(const LoopFrameInput& in, bool& made, Keyframe& kf, Matrix6d& odo_cov);
+  int keyframes() const { return next_id_; }
+
+ private:
+  LoopCloserParams params_;
+  Status init_status_;
+  KeyframeSelector selector_;
+  KeyframeBuilder builder_;
+  int next_id_ = 0;
+  Eigen::Isometry3d T_kf_frame_ = Eigen::Isometry3d::Identity();  // motion chain since the kf
+  Matrix6d C_kf_frame_ = Matrix6d::Zero();
+};
+
+struct AcceptedLoop {
+  int query = -1, candidate = -1;  // keyframe ids
+  int inliers = 0;
+  double chi2_after = 0;  // whitened squared residual in the last solution
+};
+
+struct LoopCloserStats {
+  int keyframes = 0;
+  int queries_skipped = 0;       // place query skipped (no prior score)
+  int candidates = 0;            // returned by the place database
+  int verified = 0;              // passed geometric verification
+  int rejected_verification = 0;
+  int rejected_consistency = 0;  // verified, outside the accepted clique (at the last PCM run)
+  int accepted = 0;              // loops in the accepted set
+  int optimisations = 0;
+  int last_optimisation_keyframes = 0;
+  double last_max_correction_m = 0;  // largest keyframe translation change, last solution
+};
+
+class LoopCloser {
+ public:
+  // `vocabulary` outlives this object.
+  LoopCloser(const LoopCloserParams& params, const BinaryVocabulary& vocabulary);
+  const Status& initStatus() const { return init_status_; }
+  // Back end: one keyframe (ids in order 0, 1, ...) and the odometry covariance of the edge
+  // from the previous keyframe. `optimised` says whether the pose graph was re-solved.
+  Status process(Keyframe&& kf, const Matrix6d& odo_cov, bool& optimised);
+
+  const std::vector<Keyframe>& keyframes() const { return keyframes_; }
+  // T_world_kf after the last solution; online estimates for keyframes since then are chained
+  // onto it by odometry.
+  const std::vector<Eigen::Isometry3d>& correctedKeyframes() const { return T_corrected_; }
+  // The correction C (T_corrected = C T_online, world frame) of the online pose at time t_ns:
+  // C_k = T_corrected_kf_k T_online_kf_k^-1, interpolated between the keyframes around t_ns
+  // (rotation slerp, translation lerp, by time); identity before any solution. O(log N).
+  Eigen::Isometry3d correctionAt(std::int64_t t_ns) const;
+  const std::vector<AcceptedLoop>& acceptedLoops() const { return accepted_; }
+  const LoopCloserStats& stats() const { return stats_; }
+  std::size_t memoryBytes() const;
+
+ private:
+  Status runConsistency(bool& changed);
+  Status optimise();
+
+  LoopCloserParams params_;
+  const BinaryVocabulary& vocabulary_;
+  Status init_status_;
+  PlaceDatabase places_;
+  LoopVerifier verifier_;
+  LoopConsistency consistency_;
+  PoseGraph graph_;
+  std::vector<Keyframe> keyframes_;
+  std::vector<Eigen::Isometry3d> T_online_;  // per keyframe
+  std::vector<Matrix6d> odo_cov_;            // edge k: keyframe k -> k + 1
+  std::vector<Eigen::Isometry3d> T_corrected_;  // per keyframe (see correctedKeyframes)
+  bool solved_ = false;
+  std::vector<LoopConstraint> verified_;     // newest max_pcm_candidates
+  std::vector<LoopConstraint> accepted_constraints_;
+  std::vector<AcceptedLoop> accepted_;
+  std::vector<PlaceCandidate> candidates_;
+  LoopCloserStats stats_;
+};
+
+}  // namespace svslam
