@@ -12,9 +12,10 @@
 #          32-bit NEON build compiles and is bit-exact. SVSLAM_CROSS_ARMHF_ALL=1 builds and runs
 #          the same test set as aarch64 instead.
 #
-# Not cross-built: drivers/, pipeline/, the svslam CLI, bench/ and every test that includes
-# drivers/, pipeline/, lcm/ or OpenCV headers (SVSLAM_BUILD_TOOLS=OFF: no OpenCV, yaml-cpp or LCM
-# for the target is installed; README "Cross-building for ARM" has the recipe to add them).
+# Not cross-built: drivers/, pipeline/, the svslam CLI, bench/, svslam_graph (Ceres) and every
+# test that includes drivers/, pipeline/, lcm/, OpenCV or Ceres headers or loop/pose_graph.hpp
+# (SVSLAM_BUILD_TOOLS=OFF: no OpenCV, yaml-cpp, LCM or Ceres for the target is installed; README
+# "Cross-building for ARM" has the recipe to add them).
 # Speed under qemu means nothing: never time NEON kernels here (run bench/ on a real board).
 #
 # Needs (Debian 12; scripts/install_deps.sh installs them):
@@ -43,8 +44,9 @@ test_sources() {
     "$src_dir/tests/CMakeLists.txt"
 }
 
-# Prints the first include of drivers/, pipeline/, lcm/ or OpenCV in the sources of test $1 or in
-# the test-local headers they include (one level); nothing if the test needs svslam_src alone.
+# Prints the first include of drivers/, pipeline/, lcm/, OpenCV or Ceres (directly, or through
+# loop/pose_graph.hpp, whose code is in svslam_graph) in the sources of test $1 or in the
+# test-local headers they include (one level); nothing if the test needs svslam_src alone.
 foreign_include() {
   local f dir h files=()
   for f in $(test_sources "$1"); do
@@ -56,7 +58,8 @@ foreign_include() {
     done
   done
   [[ ${#files[@]} -eq 0 ]] && return 0
-  grep -hoE '^#include [<"](drivers|pipeline|lcm|opencv2)/[^">]*' "${files[@]}" |
+  grep -hoE '^#include [<"]((drivers|pipeline|lcm|opencv2|ceres)/[^">]*|loop/pose_graph[.]hpp)' \
+    "${files[@]}" |
     head -n 1 | sed 's/^#include [<"]//' || true
 }
 
@@ -111,7 +114,7 @@ for t in "${targets[@]}"; do
     for name in "${defined[@]}"; do
       inc="$(foreign_include "$name")"
       if [[ -n "$inc" ]]; then
-        echo "   skip $name: includes $inc (drivers/pipeline/OpenCV are not cross-built)"
+        echo "   skip $name: includes $inc (drivers/pipeline/OpenCV/Ceres are not cross-built)"
       elif [[ -n "${slow_skip[$name]:-}" ]]; then
         echo "   skip $name: ${slow_skip[$name]}"
       else

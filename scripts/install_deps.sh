@@ -10,6 +10,9 @@ packages=(build-essential cmake pkg-config git
           lld
           # elevation map files: GeoTIFF writer/reader (drivers/files/dem_files.cpp)
           libgdal-dev
+          # loop closing back end: pose-graph optimisation (src/loop/pose_graph.cpp, Ceres >= 2.1;
+          # optional: without it svslam_graph and its test and benchmark are not built)
+          libceres-dev
           # real-time pipeline and service: SPSC queues, LCM (lcm-gen, glib for lcm.pc),
           # sd_notify, cameras (libcamera, v4l-utils for real hardware), iproute2 + util-linux
           # for the multicast test in a private network namespace
