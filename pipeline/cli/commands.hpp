@@ -13,6 +13,7 @@ int runEvalTrajectory(const std::vector<std::string>& args);
 int runEvalDem(const std::vector<std::string>& args);  // tools/eval_dem_command.cpp
 int runPipeline(const std::vector<std::string>& args);
 int runConfig(const std::vector<std::string>& args);  // prints the documented defaults (YAML)
-int runListen(const std::vector<std::string>& args);  // cli/listen_command.cpp (LCM)
+int runTrainVocabulary(const std::vector<std::string>& args);  // tools/train_vocabulary_command.cpp
+int runListen(const std::vector<std::string>& args);           // cli/listen_command.cpp (LCM)
 
 }  // namespace svslam::cli

@@ -23,6 +23,7 @@ constexpr const char* kUsage =
     "  config           print the documented configuration of 'run' at its defaults (--defaults)\n"
     "  eval-trajectory  drift, ATE and RPE of a trajectory against ground truth (KITTI/TUM/EuRoC)\n"
     "  eval-dem         accuracy and coverage of an elevation map (GeoTIFF) against ground truth\n"
+    "  train-vocabulary ORB bag-of-words vocabulary (loop closing) from a set of images\n"
 #ifdef SVSLAM_HAVE_LISTEN
     "  listen           print the poses (with covariance) and stats published on LCM\n"
 #endif
@@ -42,6 +43,7 @@ int dispatch(const std::string& cmd, const std::vector<std::string>& args) {
   if (cmd == "config") return svslam::cli::runConfig(args);
   if (cmd == "eval-trajectory") return svslam::cli::runEvalTrajectory(args);
   if (cmd == "eval-dem") return svslam::cli::runEvalDem(args);
+  if (cmd == "train-vocabulary") return svslam::cli::runTrainVocabulary(args);
 #ifdef SVSLAM_HAVE_LISTEN
   if (cmd == "listen") return svslam::cli::runListen(args);
 #endif

@@ -25,6 +25,7 @@ PlaceDatabase::PlaceDatabase(const PlaceDatabaseParams& params, std::size_t expe
   touched_.reserve(expected_keyframes);
   matches_.reserve(expected_keyframes);
   inverted_.resize(num_words);
+  if (num_words > 0) max_words_ = num_words;
 }
 
 Status PlaceDatabase::add(int keyframe_id, const BowVector& v) {
@@ -38,6 +39,10 @@ Status PlaceDatabase::add(int keyframe_id, const BowVector& v) {
       return Status::invalidArgument(
           "place database: BoW vector needs increasing word ids and finite weights > 0");
   }
+  if (!v.empty() && v.back().first >= max_words_)
+    return Status::invalidArgument("place database: word id " + std::to_string(v.back().first) +
+                                   " beyond the vocabulary (" + std::to_string(max_words_) +
+                                   " words)");
   if (!v.empty() && v.back().first >= inverted_.size()) inverted_.resize(v.back().first + 1u);
   for (const auto& [w, weight] : v) inverted_[w].push_back({keyframe_id, weight});
   vectors_.push_back(v);

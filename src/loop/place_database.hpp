@@ -69,12 +69,15 @@ struct PlaceQueryStats {
 
 class PlaceDatabase {
  public:
-  // expected_keyframes and num_words (both optional) reserve storage up front.
+  // expected_keyframes reserves storage up front. num_words (the vocabulary's numWords()) bounds
+  // the word ids add() accepts; 0 = unknown, then ids up to kMaxWordsUnknown - 1 are accepted.
+  static constexpr std::size_t kMaxWordsUnknown = std::size_t{1} << 24;
   explicit PlaceDatabase(const PlaceDatabaseParams& params, std::size_t expected_keyframes = 0,
                          std::size_t num_words = 0);
   const Status& initStatus() const { return init_status_; }
 
-  // Adds keyframe `keyframe_id`, which must equal size(); invalidArgument otherwise.
+  // Adds keyframe `keyframe_id`, which must equal size(), with a vector of increasing word ids
+  // (below the word bound) and finite weights > 0; invalidArgument otherwise.
   Status add(int keyframe_id, const BowVector& v);
 
   // Candidates for query `query_id` (>= 0) with vector v, see the header comment. `out` is
@@ -100,6 +103,7 @@ class PlaceDatabase {
   Status init_status_;
   std::vector<BowVector> vectors_;            // per keyframe
   std::vector<std::vector<Entry>> inverted_;  // per word
+  std::size_t max_words_ = kMaxWordsUnknown;  // word ids must be below this
   std::vector<double> accumulated_;           // per keyframe, 0 outside a query
   std::vector<std::int32_t> touched_;         // keyframes touched by the current query
   std::vector<Match> matches_;                // scratch: matches of the current query

@@ -60,6 +60,10 @@ TEST(PlaceDatabase, BadArguments) {
   EXPECT_EQ(db.add(1, {}).code(), StatusCode::kInvalidArgument);  // ids start at 0
   EXPECT_EQ(db.add(0, {{3, 0.5f}, {2, 0.5f}}).code(), StatusCode::kInvalidArgument);  // unsorted
   EXPECT_EQ(db.add(0, {{3, -1.0f}}).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(db.add(0, {{0xFFFFFFF0u, 1.0f}}).code(), StatusCode::kInvalidArgument);
+  PlaceDatabase small(PlaceDatabaseParams{}, 0, 10);
+  EXPECT_EQ(small.add(0, {{10, 1.0f}}).code(), StatusCode::kInvalidArgument);
+  EXPECT_TRUE(small.add(0, {{9, 1.0f}}).isOk());
   ASSERT_TRUE(db.add(0, {{3, 1.0f}}).isOk());
   std::vector<PlaceCandidate> out;
   EXPECT_EQ(db.query({{3, 1.0f}}, -1, out).code(), StatusCode::kInvalidArgument);
