@@ -13,6 +13,8 @@
 
 #include "drivers/files/image_io.hpp"
 #include "drivers/files/vocabulary_file.hpp"
+#include "drivers/source/stereo_source.hpp"
+#include "loop/keyframe.hpp"
 #include "features/orb_extractor.hpp"
 #include "loop/binary_vocabulary.hpp"
 #include "pipeline/cli/arg_parser.hpp"
@@ -68,19 +70,25 @@ Status listImages(const std::string& where, std::vector<std::string>& out) {
 
 int runTrainVocabulary(const std::vector<std::string>& args) {
   ArgParser p("train-vocabulary",
-              "Extracts ORB descriptors (default ORB parameters) from every image and trains a\n"
+              "Extracts ORB descriptors (the keyframes' ORB parameters) from every image (or the\n"
+              "left images of a stereo source) and trains a\n"
               "bag-of-words vocabulary tree by hierarchical k-majority clustering (loop closing).\n"
               "Prints JSON: images, descriptors, words, bytes (of the file), extract_s, train_s.");
   p.addOption("images", "DIR|LIST",
               "folder of images (png, jpg, pgm, bmp, tif; sorted by name) or a text file with one "
               "image path per line (relative to the file's folder)",
-              std::nullopt, true);
+              std::nullopt, false);
+  p.addOption("source", "SPEC",
+              "instead of --images: the left images of a stereo source (svslam run --source), e.g. "
+              "synthetic:seed=99 (keep it apart from the data loops are evaluated on)",
+              std::nullopt, false);
+  p.addOption("frames", "N", "with --source: the first N frames, 1..100000", "100");
   p.addOption("out", "FILE", "vocabulary file to write (SVVOC1)", std::nullopt, true);
   p.addOption("branching", "K", "children per node, 2..255", "10");
   p.addOption("depth", "L", "levels below the root, 1..8", "4");
   p.addOption("max-iterations", "N", "k-medians rounds per node, 1..1000", "10");
   p.addOption("seed", "S", "seed of the k-means++ initialisation, 0..2147483647", "7");
-  p.addOption("max-images", "N", "use at most N images, evenly spaced over the set (0 = all)", "0");
+  p.addOption("max-images", "N", "with --images: use at most N images, evenly spaced over the set (0 = all)", "0");
   if (auto code = parseCommandLine(p, args)) return *code;
   auto fail = [](const Status& s) { return reportFailure("train-vocabulary", s); };
   VocabularyParams vp;
@@ -99,9 +107,21 @@ int runTrainVocabulary(const std::vector<std::string>& args) {
   vp.max_iterations = *it;
   vp.seed = static_cast<std::uint64_t>(*seed);
 
+  auto frames = p.getInt("frames", 1, 100000);
+  if (!frames) return fail(frames.status());
+  if (p.has("images") == p.has("source"))
+    return fail(Status::invalidArgument("give exactly one of --images and --source"));
   std::vector<std::string> paths;
-  if (Status s = listImages(p.get("images"), paths); !s) return fail(s);
-  if (*max_images > 0 && paths.size() > static_cast<std::size_t>(*max_images)) {
+  std::unique_ptr<drivers::StereoSource> source;
+  if (p.has("source")) {
+    auto src = drivers::openStereoSource(p.get("source"));
+    if (!src) return fail(Status(src.status().code(), "--source: " + src.status().message()));
+    source = std::move(*src);
+    for (int i = 0; i < *frames; ++i) paths.push_back(p.get("source") + " frame " + std::to_string(i));
+  } else if (Status s = listImages(p.get("images"), paths); !s) {
+    return fail(s);
+  }
+  if (!source && *max_images > 0 && paths.size() > static_cast<std::size_t>(*max_images)) {
     std::vector<std::string> kept;
     const std::size_t n = paths.size(), m = static_cast<std::size_t>(*max_images);
     for (std::size_t i = 0; i < m; ++i) kept.push_back(paths[i * n / m]);
@@ -114,13 +134,24 @@ int runTrainVocabulary(const std::vector<std::string>& args) {
   std::unique_ptr<OrbExtractor> orb;
   int orb_w = 0, orb_h = 0;
   std::size_t total = 0;
+  drivers::StereoFrame frame;
+  std::size_t used = 0;
   for (const std::string& path : paths) {
-    auto img = drivers::loadGrey(path);
+    Result<ImageU8> img = Status::invalidArgument("no image");
+    if (source) {
+      auto more = source->next(frame);
+      if (!more) return fail(Status(more.status().code(), path + ": " + more.status().message()));
+      if (!*more) break;  // the source ended before --frames
+      img = std::move(frame.left);
+    } else {
+      img = drivers::loadGrey(path);
+    }
     if (!img) return fail(img.status());
+    ++used;
     if (!orb || img->width() != orb_w || img->height() != orb_h) {
       orb_w = img->width();
       orb_h = img->height();
-      orb = std::make_unique<OrbExtractor>(OrbParams{}, orb_w, orb_h);
+      orb = std::make_unique<OrbExtractor>(KeyframeParams::defaultOrb(), orb_w, orb_h);
       if (!orb->initStatus())
         return fail(Status(orb->initStatus().code(), path + ": " + orb->initStatus().message()));
     }
@@ -138,7 +169,7 @@ int runTrainVocabulary(const std::vector<std::string>& args) {
   std::error_code ec;
   const auto bytes = fs::file_size(out, ec);
   JsonObject j;
-  j.add("images", static_cast<std::int64_t>(paths.size()))
+  j.add("images", static_cast<std::int64_t>(used))
       .add("descriptors", static_cast<std::int64_t>(total))
       .add("words", voc->numWords())
       .add("bytes", static_cast<std::int64_t>(ec ? 0 : bytes))
