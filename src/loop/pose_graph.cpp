@@ -5,7 +5,7 @@
 #include <ceres/rotation.h>
 
 #include <Eigen/Cholesky>
-#include <memory>
+#include <cmath>
 #include <numeric>
 
 namespace svslam {
