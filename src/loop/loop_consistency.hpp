@@ -78,8 +78,8 @@ struct LoopConsistencyResult {
   std::vector<double> single_chi2;     // per candidate: the (a) statistic
   std::vector<int> clique;             // the maximum clique, ascending candidate indices
   bool clique_exact = true;            // false when the greedy search was used (> 64 vertices)
-  // Pair statistic e^T C^-1 e of (b), symmetric, n x n; NaN where not evaluated (a candidate
-  // failed (a)) and 0 on the diagonal.
+  // Pair statistic e^T C^-1 e of (b), symmetric, n x n; NaN in the rows and columns of the
+  // candidates that failed (a) (not evaluated), 0 on the diagonal of the others.
   Eigen::MatrixXd pair_chi2;
 };
 

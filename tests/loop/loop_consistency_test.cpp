@@ -134,46 +134,56 @@ TEST(LoopConsistency, StatisticsAreChiSquareSixDof) {
   EXPECT_NEAR(mean_pair02, 6.0, 0.6);
 }
 
-// A drifting two-lap trajectory: ten good loops (lap 2 -> lap 1) and outliers (gross, and
-// subtle ones of 0.8 m and 2 degrees that pass the single gate): the good loops are the clique.
+// Drifting two-lap trajectories (ten seeds): ten good loops (lap 2 -> lap 1) and outliers
+// (gross, and subtle ones of 0.8 m and 2 degrees, some of which pass the single gate). No
+// outlier is ever accepted. A good loop can be dropped: each pair of good loops fails the 99 %
+// pair gate with probability 1 %, so with 45 pairs about one scene in five loses one (100-seed
+// check: mean pair chi2 6.06, 1.1 % of pairs over the gate, 97.4 % of good loops kept); here at
+// least 8 of 10 per scene and 90 % overall.
 TEST(LoopConsistency, RejectsOutliersOnADriftingChain) {
   const int per_lap = 100, n = 200;
   const Matrix6d Co = diagCov(0.003, 0.02), Cl = diagCov(0.002, 0.05);
-  const auto s = loop_test::makeScene(n, per_lap, Co, 5);
-  std::mt19937 rng(12);
-  std::vector<LoopCandidateEdge> loops;
-  std::vector<bool> inlier;
-  for (int k = 5; k < 100; k += 10) {
-    const Eigen::Isometry3d Z = s.truth[k + per_lap].inverse() * s.truth[k];
-    loops.push_back({k + per_lap, k, boxPlus(Z, sampleNoise(Cl, rng)), Cl});
-    inlier.push_back(true);
+  int inliers_accepted = 0, subtle_passed_single = 0;
+  for (std::uint32_t seed = 5; seed < 15; ++seed) {
+    const auto s = loop_test::makeScene(n, per_lap, Co, seed);
+    std::mt19937 rng(seed + 100);
+    std::vector<LoopCandidateEdge> loops;
+    for (int k = 5; k < 100; k += 10) {
+      const Eigen::Isometry3d Z = s.truth[k + per_lap].inverse() * s.truth[k];
+      loops.push_back({k + per_lap, k, boxPlus(Z, sampleNoise(Cl, rng)), Cl});
+    }
+    std::uniform_int_distribution<int> kf(0, n - 1);
+    for (int o = 0; o < 4; ++o) {  // gross: a random pair said to be 1 m apart
+      const int a = kf(rng);
+      int b = kf(rng);
+      if (a == b) b = (a + 50) % n;
+      loops.push_back({a, b, translation(Eigen::Vector3d(1, 0, 0)), Cl});
+    }
+    for (const int k : {12, 47, 81}) {  // subtle: a true loop off by 0.8 m and 2 degrees
+      const Eigen::Isometry3d Z = s.truth[k + per_lap].inverse() * s.truth[k];
+      Vector6d d;
+      d << 0, 0, 0.035, 0.8, 0, 0;
+      loops.push_back({k + per_lap, k, boxPlus(Z, d), Cl});
+    }
+    LoopConsistency pcm(LoopConsistencyParams{});
+    LoopConsistencyResult out;
+    ASSERT_TRUE(pcm.process(s.odometry, s.odo_cov, loops, out).isOk());
+    EXPECT_TRUE(out.clique_exact);
+    int accepted = 0;
+    for (int i = 0; i < static_cast<int>(loops.size()); ++i) {
+      const bool ok = out.decision[i] == LoopDecision::kAccepted;
+      if (i < 10) accepted += ok ? 1 : 0;
+      if (i >= 10) {
+        EXPECT_FALSE(ok) << "seed " << seed << " outlier " << i;
+      }
+      if (i >= 14 && out.decision[i] != LoopDecision::kRejectedSingle) ++subtle_passed_single;
+    }
+    EXPECT_GE(accepted, 8) << "seed " << seed;
+    EXPECT_EQ(out.clique.size(), static_cast<std::size_t>(accepted));
+    inliers_accepted += accepted;
   }
-  std::uniform_int_distribution<int> kf(0, n - 1);
-  for (int o = 0; o < 4; ++o) {  // gross: a random pair said to be 1 m apart
-    int a = kf(rng), b = kf(rng);
-    if (a == b) b = (a + 50) % n;
-    loops.push_back({a, b, translation(Eigen::Vector3d(1, 0, 0)), Cl});
-    inlier.push_back(false);
-  }
-  for (const int k : {12, 47, 81}) {  // subtle: a true loop off by 0.8 m and 2 degrees
-    const Eigen::Isometry3d Z = s.truth[k + per_lap].inverse() * s.truth[k];
-    Vector6d d;
-    d << 0, 0, 0.035, 0.8, 0, 0;
-    loops.push_back({k + per_lap, k, boxPlus(Z, d), Cl});
-    inlier.push_back(false);
-  }
-  LoopConsistency pcm(LoopConsistencyParams{});
-  LoopConsistencyResult out;
-  ASSERT_TRUE(pcm.process(s.odometry, s.odo_cov, loops, out).isOk());
-  EXPECT_TRUE(out.clique_exact);
-  int subtle_passed_single = 0;
-  for (std::size_t i = 0; i < loops.size(); ++i) {
-    EXPECT_EQ(out.decision[i] == LoopDecision::kAccepted, inlier[i])
-        << i << " single " << out.single_chi2[i];
-    if (i >= 14 && out.decision[i] != LoopDecision::kRejectedSingle) ++subtle_passed_single;
-  }
-  EXPECT_GE(subtle_passed_single, 1);  // (b) does work that (a) cannot
-  EXPECT_EQ(out.clique.size(), 10u);
+  EXPECT_GE(inliers_accepted, 90);
+  EXPECT_GE(subtle_passed_single, 5);  // (b) does work that (a) cannot
 }
 
 TEST(LoopConsistency, MinCliqueRejectsALoneLoop) {
