@@ -91,6 +91,8 @@ Status SyntheticFlightParams::validate() const {
   if (!inRange(camera_pitch_deg, 0.0, 90.0)) return outOfRange("camera_pitch_deg", "in [0, 90]");
   if (!inRange(loop_length_m, 1.0, 2000.0)) return outOfRange("loop_length_m", "in [1, 2000]");
   if (!inRange(loop_aspect, 0.1, 1.0)) return outOfRange("loop_aspect", "in [0.1, 1]");
+  if (!(texture_period_m == 0.0 || inRange(texture_period_m, 5.0, 1e4)))
+    return outOfRange("texture_period_m", "0 or in [5, 10000]");
   if (!inRange(wobble_deg, 0.0, 20.0)) return outOfRange("wobble_deg", "in [0, 20]");
   if (!inRange(wobble_period_s, 1e-3, 1e6)) return outOfRange("wobble_period_s", "in [0.001, 1e6]");
   if (!inRange(noise_sigma, 0.0, 50.0)) return outOfRange("noise_sigma", "in [0, 50]");
@@ -265,7 +267,13 @@ double SyntheticFlight::shadeRay(const Eigen::Vector3d& o, const Eigen::Vector3d
   const double cos_inc = std::max(std::fabs(n.dot(d)) / d_norm, 0.15);
   const double fp_m = dist / (calib_.f_px * params_.supersample * cos_inc);
   const double lambert = std::max(n.dot(sun_W_), 0.0) / sun_W_.z();  // 1 on flat ground
-  const double v = albedo_.at(p.x(), p.y(), fp_m) * (0.3 + 0.7 * lambert);
+  double ax = p.x(), ay = p.y();
+  if (params_.texture_period_m > 0.0) {  // look-alike places (the seam is a texture edge)
+    const double P = params_.texture_period_m;
+    ax -= P * std::floor(ax / P);
+    ay -= P * std::floor(ay / P);
+  }
+  const double v = albedo_.at(ax, ay, fp_m) * (0.3 + 0.7 * lambert);
   const double horizon = skyAt(0.0);
   return horizon + (v - horizon) * std::exp(-dist / params_.haze_m);
 }

@@ -77,6 +77,9 @@ struct SyntheticFlightParams {
   double terrain_cell_m = 48.0;    // largest terrain wavelength, m, [1, 10000]; rover 40
   double noise_sigma = 1.0;        // pixel noise standard deviation, grey levels, [0, 50]
   double max_range_m = 1000.0;     // ground farther than this is sky, m, [1, 1e6]
+  // > 0: the albedo repeats every texture_period_m along x and y (the heights do not): distinct
+  // places that look alike, to test loop closing against false loops. m, 0 or [5, 1e4].
+  double texture_period_m = 0.0;
   double haze_m = 400.0;   // terrain contrast scales by exp(-distance / haze_m), m, [1, 1e9]
   int supersample = 1;     // s x s rays per pixel (1 = band-limited point sample), 1..4
   std::uint64_t seed = 1;  // terrain, texture, wobble phases and noise

@@ -117,6 +117,7 @@ Result<SyntheticFlightParams> parseSyntheticOptions(const std::string& options) 
                                                   {"camera_pitch_deg", &p.camera_pitch_deg},
                                                   {"loop_length_m", &p.loop_length_m},
                                                   {"loop_aspect", &p.loop_aspect},
+                                                  {"texture_period_m", &p.texture_period_m},
                                                   {"wobble_deg", &p.wobble_deg},
                                                   {"wobble_period_s", &p.wobble_period_s},
                                                   {"relief_m", &p.relief_m},

@@ -26,6 +26,7 @@ namespace {
 struct KeyframeItem {
   Keyframe kf;
   Matrix6d odo_cov = Matrix6d::Zero();
+  Eigen::Isometry3d odo_T = Eigen::Isometry3d::Identity();
 };
 constexpr std::size_t kRingKeyframes = 64;
 }  // namespace
@@ -63,11 +64,11 @@ void LoopStage::Impl::backEnd() {
     std::unique_ptr<KeyframeItem> item;
     ring.wait_dequeue(item);
     if (!item) return;  // end of the run
-    if (!error) {
+    if (error.isOk()) {
       const std::int64_t t_ns = item->kf.t_ns;
       bool optimised = false;
       const std::int64_t t0 = steadyNowNs();
-      const Status s = closer->process(std::move(item->kf), item->odo_cov, optimised);
+      const Status s = closer->process(std::move(item->kf), item->odo_cov, item->odo_T, optimised);
       if (!s) {
         error = Status(s.code(), "loop closing, keyframe at t_ns " + std::to_string(t_ns) + ": " +
                                      s.message());
@@ -155,7 +156,7 @@ Status LoopStage::process(FrameSlot& slot) {
   in.dense = slot.stereo.has_disparity ? &slot.stereo.disparity : nullptr;
   auto item = std::make_unique<KeyframeItem>();
   bool made = false;
-  if (Status s = m.front->process(in, made, item->kf, item->odo_cov); !s)
+  if (Status s = m.front->process(in, made, item->kf, item->odo_cov, item->odo_T); !s)
     return Status(s.code(), "loop closing, frame " + std::to_string(slot.frame.index) + ": " +
                                 s.message());
   if (made) {
@@ -192,7 +193,7 @@ Status LoopStage::finish() {
 
 std::string LoopStage::json() const {
   const Impl& m = *impl_;
-  JsonObject o;
+  cli::JsonObject o;
   if (!m.closer) return o.str();
   const LoopCloserStats& st = m.closer->stats();
   o.add("vocabulary_words", m.vocabulary_words);
@@ -213,9 +214,13 @@ std::string LoopStage::json() const {
   o.add("memory_bytes", static_cast<std::int64_t>(m.closer->memoryBytes()));
   std::string loops = "[";
   for (const AcceptedLoop& a : m.closer->acceptedLoops()) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "%s{\"query\": %d, \"candidate\": %d, \"inliers\": %d}",
-                  loops.size() > 1 ? ", " : "", a.query, a.candidate, a.inliers);
+    char buf[256];
+    std::snprintf(buf, sizeof buf,
+                  "%s{\"query\": %d, \"candidate\": %d, \"query_frame\": %lld, "
+                  "\"candidate_frame\": %lld, \"inliers\": %d}",
+                  loops.size() > 1 ? ", " : "", a.query, a.candidate,
+                  static_cast<long long>(a.query_frame), static_cast<long long>(a.candidate_frame),
+                  a.inliers);
     loops += buf;
   }
   o.addRaw("accepted", loops + "]");

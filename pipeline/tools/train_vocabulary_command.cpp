@@ -137,26 +137,28 @@ int runTrainVocabulary(const std::vector<std::string>& args) {
   drivers::StereoFrame frame;
   std::size_t used = 0;
   for (const std::string& path : paths) {
-    Result<ImageU8> img = Status::invalidArgument("no image");
+    Result<ImageU8> loaded = Status::invalidArgument("no image");
+    ImageView<const std::uint8_t> view;
     if (source) {
-      auto more = source->next(frame);
+      auto more = source->next(frame);  // the source reuses frame's buffers
       if (!more) return fail(Status(more.status().code(), path + ": " + more.status().message()));
       if (!*more) break;  // the source ended before --frames
-      img = std::move(frame.left);
+      view = frame.left.cview();
     } else {
-      img = drivers::loadGrey(path);
+      loaded = drivers::loadGrey(path);
+      if (!loaded) return fail(loaded.status());
+      view = loaded->cview();
     }
-    if (!img) return fail(img.status());
     ++used;
-    if (!orb || img->width() != orb_w || img->height() != orb_h) {
-      orb_w = img->width();
-      orb_h = img->height();
+    if (!orb || view.width != orb_w || view.height != orb_h) {
+      orb_w = view.width;
+      orb_h = view.height;
       orb = std::make_unique<OrbExtractor>(KeyframeParams::defaultOrb(), orb_w, orb_h);
       if (!orb->initStatus())
         return fail(Status(orb->initStatus().code(), path + ": " + orb->initStatus().message()));
     }
     descriptors.emplace_back();
-    if (Status s = orb->process(img->view(), keypoints, descriptors.back()); !s)
+    if (Status s = orb->process(view, keypoints, descriptors.back()); !s)
       return fail(Status(s.code(), path + ": " + s.message()));
     total += descriptors.back().size();
   }

@@ -30,7 +30,7 @@ LoopFrontEnd::LoopFrontEnd(const LoopCloserParams& params, const StereoCalibrati
 }
 
 Status LoopFrontEnd::process(const LoopFrameInput& in, bool& made, Keyframe& kf,
-                             Matrix6d& odo_cov) {
+                             Matrix6d& odo_cov, Eigen::Isometry3d& odo_T_prev_kf) {
   made = false;
   if (!init_status_) return init_status_;
   if (!in.T_world_cam.matrix().allFinite())
@@ -58,6 +58,7 @@ Status LoopFrontEnd::process(const LoopFrameInput& in, bool& made, Keyframe& kf,
     return s;
   }
   odo_cov = C_kf_frame_;
+  odo_T_prev_kf = T_kf_frame_;
   if (next_id_ > 0) {
     odo_cov.topLeftCorner<3, 3>().diagonal().array() +=
         params_.odometry_floor_rot_rad * params_.odometry_floor_rot_rad;
@@ -97,7 +98,8 @@ std::size_t LoopCloser::memoryBytes() const {
   return b;
 }
 
-Status LoopCloser::process(Keyframe&& kf, const Matrix6d& odo_cov, bool& optimised) {
+Status LoopCloser::process(Keyframe&& kf, const Matrix6d& odo_cov,
+                           const Eigen::Isometry3d& odo_T_prev_kf, bool& optimised) {
   optimised = false;
   if (!init_status_) return init_status_;
   if (kf.id != static_cast<int>(keyframes_.size()))
@@ -106,7 +108,10 @@ Status LoopCloser::process(Keyframe&& kf, const Matrix6d& odo_cov, bool& optimis
     return Status::invalidArgument("loop closer: odometry covariance not positive definite");
   vocabulary_.transform(kf.descriptors, kf.bow);
   const int id = kf.id;
-  if (id > 0) odo_cov_.push_back(odo_cov);
+  if (id > 0) {
+    odo_cov_.push_back(odo_cov);
+    odo_T_.push_back(odo_T_prev_kf);
+  }
   T_online_.push_back(kf.T_world_cam);
   // Chained onto the last corrected keyframe by the odometry until the next solution.
   T_corrected_.push_back(id == 0 ? kf.T_world_cam
@@ -183,6 +188,8 @@ Status LoopCloser::runConsistency(bool& changed) {
     a.query = set[static_cast<std::size_t>(i)].query;
     a.candidate = set[static_cast<std::size_t>(i)].candidate;
     a.inliers = set[static_cast<std::size_t>(i)].inliers;
+    a.query_frame = keyframes_[static_cast<std::size_t>(a.query)].frame;
+    a.candidate_frame = keyframes_[static_cast<std::size_t>(a.candidate)].frame;
     accepted_.push_back(a);
     changed = true;
   }
@@ -199,7 +206,7 @@ Status LoopCloser::optimise() {
     PoseGraphEdge e;
     e.from = static_cast<int>(k);
     e.to = static_cast<int>(k + 1);
-    e.T_from_to = T_online_[k].inverse() * T_online_[k + 1];
+    e.T_from_to = odo_T_[k];
     e.covariance = odo_cov_[k];
     edges.push_back(e);
   }

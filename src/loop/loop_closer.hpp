@@ -80,7 +80,8 @@ class LoopFrontEnd {
   // True in `made` when the frame became keyframe `kf` (with the odometry covariance since the
   // previous keyframe in `odo_cov`, zero for the first). A frame without dense disparity or too
   // few points is not a keyframe (not an error).
-  Status process(const LoopFrameInput& in, bool& made, Keyframe& kf, Matrix6d& odo_cov);
+  Status process(const LoopFrameInput& in, bool& made, Keyframe& kf, Matrix6d& odo_cov,
+                 Eigen::Isometry3d& odo_T_prev_kf);
   int keyframes() const { return next_id_; }
 
  private:
@@ -95,6 +96,7 @@ class LoopFrontEnd {
 
 struct AcceptedLoop {
   int query = -1, candidate = -1;  // keyframe ids
+  std::int64_t query_frame = 0, candidate_frame = 0;  // their source frame indices
   int inliers = 0;
   double chi2_after = 0;  // whitened squared residual in the last solution
 };
@@ -119,7 +121,8 @@ class LoopCloser {
   const Status& initStatus() const { return init_status_; }
   // Back end: one keyframe (ids in order 0, 1, ...) and the odometry covariance of the edge
   // from the previous keyframe. `optimised` says whether the pose graph was re-solved.
-  Status process(Keyframe&& kf, const Matrix6d& odo_cov, bool& optimised);
+  Status process(Keyframe&& kf, const Matrix6d& odo_cov, const Eigen::Isometry3d& odo_T_prev_kf,
+                 bool& optimised);
 
   const std::vector<Keyframe>& keyframes() const { return keyframes_; }
   // T_world_kf after the last solution; online estimates for keyframes since then are chained
@@ -147,6 +150,7 @@ class LoopCloser {
   std::vector<Keyframe> keyframes_;
   std::vector<Eigen::Isometry3d> T_online_;  // per keyframe
   std::vector<Matrix6d> odo_cov_;            // edge k: keyframe k -> k + 1
+  std::vector<Eigen::Isometry3d> odo_T_;     // edge k: T_k_(k+1) of the motion chain
   std::vector<Eigen::Isometry3d> T_corrected_;  // per keyframe (see correctedKeyframes)
   bool solved_ = false;
   std::vector<LoopConstraint> verified_;     // newest max_pcm_candidates
