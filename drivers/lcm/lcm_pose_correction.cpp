@@ -49,8 +49,8 @@ Status encodePoseCorrection(const PoseCorrectionMessage& m, std::vector<std::uin
   w.keyframes_total = m.keyframes_total;
   w.num_keyframes = static_cast<std::int32_t>(n);
   w.keyframe_utime.resize(n);
-  w.position.resize(n);
-  w.orientation.resize(n);
+  w.position.assign(n, std::vector<double>(3));
+  w.orientation.assign(n, std::vector<double>(4));
   for (std::size_t k = 0; k < n; ++k) {
     if (!rigid(m.correction[k]))
       return Status::invalidArgument("pose correction: keyframe " + std::to_string(k) +
@@ -104,6 +104,7 @@ Status decodePoseCorrection(const std::uint8_t* data, std::size_t size, PoseCorr
   for (std::int32_t k = 0; k < w.num_keyframes; ++k) {
     const auto& p = w.position[static_cast<std::size_t>(k)];
     const auto& o = w.orientation[static_cast<std::size_t>(k)];
+    if (p.size() != 3 || o.size() != 4) return corrupt("malformed keyframe arrays");
     const Eigen::Quaterniond q(o[0], o[1], o[2], o[3]);
     const Eigen::Vector3d t(p[0], p[1], p[2]);
     if (!t.allFinite() || !q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-6)

@@ -51,6 +51,15 @@ struct LoopStage::Impl {
   std::int64_t corrections_published = 0;
   std::vector<Eigen::Isometry3d> last_sent;  // per keyframe, the correction last published
   std::vector<double> solve_ms;
+  // Per frame seen (front-end thread; read after the run): its keyframe and motion chain from
+  // it, for the optimised trajectory.
+  struct FrameLink {
+    std::int64_t t_ns;
+    int kf;
+    Eigen::Quaternionf q;
+    Eigen::Vector3f t;
+  };
+  std::vector<FrameLink> links;
   double vocabulary_load_ms = 0;
   int vocabulary_words = 0;
   std::int64_t frames_seen = 0;
@@ -63,7 +72,18 @@ void LoopStage::Impl::backEnd() {
   for (;;) {
     std::unique_ptr<KeyframeItem> item;
     ring.wait_dequeue(item);
-    if (!item) return;  // end of the run
+    if (!item) {  // end of the run: solve what is pending
+      bool optimised = false;
+      if (error.isOk()) {
+        const std::int64_t t0 = steadyNowNs();
+        if (Status s = closer->finish(optimised); !s) error = s;
+        if (optimised) {
+          solve_ms.push_back(static_cast<double>(steadyNowNs() - t0) * 1e-6);
+          if (lcm && !closer->keyframes().empty()) publishCorrection(closer->keyframes().back());
+        }
+      }
+      return;
+    }
     if (error.isOk()) {
       const std::int64_t t_ns = item->kf.t_ns;
       bool optimised = false;
@@ -159,6 +179,12 @@ Status LoopStage::process(FrameSlot& slot) {
   if (Status s = m.front->process(in, made, item->kf, item->odo_cov, item->odo_T); !s)
     return Status(s.code(), "loop closing, frame " + std::to_string(slot.frame.index) + ": " +
                                 s.message());
+  if (m.front->lastKeyframe() >= 0) {
+    const Eigen::Isometry3d& T = m.front->chainFromLastKeyframe();
+    m.links.push_back({slot.frame.t_ns, m.front->lastKeyframe(),
+                       Eigen::Quaternionf(Eigen::Quaterniond(T.linear()).cast<float>()),
+                       T.translation().cast<float>()});
+  }
   if (made) {
     times_.add("keyframe", static_cast<double>(steadyNowNs() - t0) * 1e-6);
     m.ring.wait_enqueue(std::move(item));
@@ -183,9 +209,25 @@ Status LoopStage::finish() {
                         m.out_dir + "/" + run::files::kTrajectoryOptimizedTum);
       !s)
     return s;
+  // A frame the front end saw: its corrected keyframe and the motion chain from it (the filter's
+  // own jumps, e.g. when anchors come back, are not in the chain); a frame it skipped: the
+  // online pose moved by the interpolated keyframe correction.
+  const std::vector<Eigen::Isometry3d>& kf = m.closer->correctedKeyframes();
+  std::size_t j = 0;
   for (std::size_t i = 0; i < traj->poses.size(); ++i) {
-    const Eigen::Isometry3d T = m.closer->correctionAt(traj->t_ns[i]) * traj->poses[i];
-    if (Status s = w.append(traj->t_ns[i], T); !s) return s;
+    const std::int64_t t = traj->t_ns[i];
+    while (j < m.links.size() && m.links[j].t_ns < t) ++j;
+    Eigen::Isometry3d T;
+    if (j < m.links.size() && m.links[j].t_ns == t &&
+        static_cast<std::size_t>(m.links[j].kf) < kf.size()) {
+      Eigen::Isometry3d chain = Eigen::Isometry3d::Identity();
+      chain.linear() = m.links[j].q.cast<double>().normalized().toRotationMatrix();
+      chain.translation() = m.links[j].t.cast<double>();
+      T = kf[static_cast<std::size_t>(m.links[j].kf)] * chain;
+    } else {
+      T = m.closer->correctionAt(t) * traj->poses[i];
+    }
+    if (Status s = w.append(t, T); !s) return s;
   }
   w.close();
   return Status::ok();

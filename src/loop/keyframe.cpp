@@ -77,6 +77,34 @@ KeyframeBuilder::KeyframeBuilder(const KeyframeParams& params, const StereoCalib
   depths_.reserve(cap);
 }
 
+// The keypoint's own sub-pixel position with the disparity and sigma bilinearly interpolated
+// from its 4 neighbouring pixels (all valid, disparities within 1 px of each other: not across
+// a depth edge), reprojected with the keypoint's matching error.
+bool KeyframeBuilder::subpixelPoint(const DisparityResult& dense, float u_px, float v_px,
+                                    StereoPoint& out) const {
+  const int x0 = static_cast<int>(std::floor(u_px)), y0 = static_cast<int>(std::floor(v_px));
+  if (x0 < 0 || y0 < 0 || x0 + 1 >= dense.disparity_px.width() ||
+      y0 + 1 >= dense.disparity_px.height())
+    return false;
+  const float ax = u_px - static_cast<float>(x0), ay = v_px - static_cast<float>(y0);
+  float d[4], s[4];
+  for (int i = 0; i < 4; ++i) {
+    d[i] = dense.disparity_px(x0 + (i & 1), y0 + (i >> 1));
+    s[i] = dense.sigma_d_px(x0 + (i & 1), y0 + (i >> 1));
+    if (!std::isfinite(d[i]) || !std::isfinite(s[i]) || !(d[i] > 0.0f)) return false;
+  }
+  const float lo = std::min({d[0], d[1], d[2], d[3]}), hi = std::max({d[0], d[1], d[2], d[3]});
+  if (hi - lo > 1.0f) return false;
+  const float w[4] = {(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay};
+  float dd = 0, ss = 0;
+  for (int i = 0; i < 4; ++i) {
+    dd += w[i] * d[i];
+    ss += w[i] * s[i];
+  }
+  out = reprojectPixel(calib_, u_px, v_px, dd, ss, params_.matching_error_px);
+  return out.p_cam.allFinite() && out.cov.allFinite();
+}
+
 Status KeyframeBuilder::process(ImageView<const std::uint8_t> left, const DisparityResult& dense,
                                 Keyframe& out) {
   if (!init_status_) return init_status_;
@@ -122,9 +150,7 @@ Status KeyframeBuilder::process(ImageView<const std::uint8_t> left, const Dispar
     if (out.descriptors.size() >= max_points) break;
     const OrbKeypoint& k = kp_[static_cast<std::size_t>(i)];
     StereoPoint p;
-    if (!stereoObservation(calib_, &dense, k.x_px, k.y_px, 0.0f, 0.0f, params_.matching_error_px,
-                           p))
-      continue;
+    if (!subpixelPoint(dense, k.x_px, k.y_px, p)) continue;
     if (!p.p_cam.allFinite() || !p.cov.allFinite() || !(p.p_cam.z() > 0)) continue;
     if (std::sqrt(p.cov.trace()) > params_.max_point_sigma_m) continue;
     out.descriptors.push_back(desc_[static_cast<std::size_t>(i)]);

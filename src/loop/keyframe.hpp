@@ -11,10 +11,12 @@
 // 0.1 keeps about 90 % overlap at 60 deg (a keyframe every 2.7 m for a blimp at 27 m).
 //
 // Content (KeyframeBuilder): ORB keypoints of the left image (seed 002's improved ORB,
-// features/orb_extractor.hpp) whose pixel has a valid dense disparity become 3D points with
-// covariance through stereoObservation (the 8-neighbour observation of seed 001 sec 4.1, left
-// camera frame of the keyframe, m). At most max_points are kept, taken round-robin over the
-// ORB bucketing cells (strongest first in each), so they stay spread over the image.
+// features/orb_extractor.hpp) whose 2 x 2 neighbouring pixels have valid dense disparities
+// within 1 px of each other (not across a depth edge) become 3D points with covariance: the
+// disparity and its sigma bilinearly interpolated at the keypoint's sub-pixel position, then
+// reprojected (stereo/reprojection.hpp) with matching_error_px in the image plane (left camera
+// frame of the keyframe, m). At most max_points are kept, taken round-robin over the ORB
+// bucketing cells (strongest first in each), so they stay spread over the image.
 // Memory: 32 (descriptor) + 12 (point) + 24 (covariance, upper triangle as float) + 8
 // (pixel) = 76 bytes a point plus the BoW vector (8 bytes a word): 400 points and 400 words
 // take 33.6 kB (bytes() gives the figure of one keyframe).
@@ -31,6 +33,7 @@
 #include "core/status.hpp"
 #include "features/orb_extractor.hpp"
 #include "stereo/dense_stereo.hpp"
+#include "stereo/reprojection.hpp"
 
 namespace svslam {
 
@@ -91,6 +94,7 @@ class KeyframeBuilder {
   Status process(ImageView<const std::uint8_t> left, const DisparityResult& dense, Keyframe& out);
 
  private:
+  bool subpixelPoint(const DisparityResult& dense, float u_px, float v_px, StereoPoint& out) const;
   KeyframeParams params_;
   StereoCalibration calib_;
   Status init_status_;

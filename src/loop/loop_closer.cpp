@@ -17,6 +17,11 @@ Status LoopCloserParams::validate() const {
     return Status::invalidArgument("loop.min_consistent_loops must be >= 1");
   if (max_pcm_candidates < 2 || max_pcm_candidates > 1000)
     return Status::invalidArgument("loop.max_pcm_candidates must be in 2..1000");
+  if (!(gap_rot_sigma_rad > 0) || !std::isfinite(gap_rot_sigma_rad) ||
+      !(gap_trans_sigma_m > 0) || !std::isfinite(gap_trans_sigma_m))
+    return Status::invalidArgument("loop.gap_rot_sigma_rad and _trans_m must be > 0");
+  if (solve_every_keyframes < 1)
+    return Status::invalidArgument("loop.solve_every_keyframes must be >= 1");
   if (!(odometry_floor_rot_rad > 0) || !std::isfinite(odometry_floor_rot_rad) ||
       !(odometry_floor_trans_m > 0) || !std::isfinite(odometry_floor_trans_m))
     return Status::invalidArgument("loop.odometry_floor_rot_rad and _trans_m must be > 0");
@@ -37,16 +42,26 @@ Status LoopFrontEnd::process(const LoopFrameInput& in, bool& made, Keyframe& kf,
     return Status::invalidArgument("loop front end: non-finite pose");
   // Chain this frame's motion onto T_kf_frame (see the header).
   if (next_id_ > 0) {
-    if (in.motion_valid && in.motion_cov.allFinite() && in.T_cur_prev.matrix().allFinite()) {
-      const Eigen::Isometry3d D = in.T_cur_prev.inverse();
+    Eigen::Isometry3d D;  // T_prev_cur
+    Matrix6d C_D;
+    if (in.motion_valid && in.frame == last_frame_ + 1 && in.motion_cov.allFinite() &&
+        in.T_cur_prev.matrix().allFinite()) {
+      D = in.T_cur_prev.inverse();
       const Matrix6d J = inverseJacobian(in.T_cur_prev);
-      const Matrix6d C_D = J * in.motion_cov * J.transpose();
-      std::vector<Eigen::Isometry3d> f{T_kf_frame_, D};
-      std::vector<Matrix6d> A;
-      T_kf_frame_ = productJacobians(f, A);
-      C_kf_frame_ = A[0] * C_kf_frame_ * A[0].transpose() + A[1] * C_D * A[1].transpose();
+      C_D = J * in.motion_cov * J.transpose();
+    } else {  // no motion estimate, or frames skipped: the online estimate's relative pose
+      D = T_world_last_.inverse() * in.T_world_cam;
+      C_D.setZero();
+      C_D.diagonal().head<3>().setConstant(params_.gap_rot_sigma_rad * params_.gap_rot_sigma_rad);
+      C_D.diagonal().tail<3>().setConstant(params_.gap_trans_sigma_m * params_.gap_trans_sigma_m);
     }
+    std::vector<Eigen::Isometry3d> f{T_kf_frame_, D};
+    std::vector<Matrix6d> A;
+    T_kf_frame_ = productJacobians(f, A);
+    C_kf_frame_ = A[0] * C_kf_frame_ * A[0].transpose() + A[1] * C_D * A[1].transpose();
   }
+  last_frame_ = in.frame;
+  T_world_last_ = in.T_world_cam;
   if (!selector_.isKeyframe(in.T_world_cam) || in.dense == nullptr) return Status::ok();
   kf.id = next_id_;
   kf.frame = in.frame;
@@ -147,7 +162,18 @@ Status LoopCloser::process(Keyframe&& kf, const Matrix6d& odo_cov,
   if (!new_verified) return Status::ok();
   bool changed = false;
   if (Status s = runConsistency(changed); !s) return s;
-  if (!changed) return Status::ok();
+  pending_ = pending_ || changed;
+  if (!pending_) return Status::ok();
+  if (solved_ && static_cast<int>(keyframes_.size()) - solved_keyframes_ < params_.solve_every_keyframes)
+    return Status::ok();
+  if (Status s = optimise(); !s) return s;
+  optimised = true;
+  return Status::ok();
+}
+
+Status LoopCloser::finish(bool& optimised) {
+  optimised = false;
+  if (!init_status_ || !pending_) return init_status_;
   if (Status s = optimise(); !s) return s;
   optimised = true;
   return Status::ok();
@@ -188,6 +214,8 @@ Status LoopCloser::runConsistency(bool& changed) {
     a.query = set[static_cast<std::size_t>(i)].query;
     a.candidate = set[static_cast<std::size_t>(i)].candidate;
     a.inliers = set[static_cast<std::size_t>(i)].inliers;
+    a.T_query_candidate = set[static_cast<std::size_t>(i)].T_query_candidate;
+    a.covariance = set[static_cast<std::size_t>(i)].covariance;
     a.query_frame = keyframes_[static_cast<std::size_t>(a.query)].frame;
     a.candidate_frame = keyframes_[static_cast<std::size_t>(a.candidate)].frame;
     accepted_.push_back(a);
@@ -223,6 +251,8 @@ Status LoopCloser::optimise() {
   if (Status s = graph_.optimize(poses, edges, 0, rep); !s) return s;
   T_corrected_ = poses;
   solved_ = true;
+  pending_ = false;
+  solved_keyframes_ = static_cast<int>(poses.size());
   ++stats_.optimisations;
   stats_.last_optimisation_keyframes = static_cast<int>(poses.size());
   double max_m = 0;

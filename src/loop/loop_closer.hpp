@@ -10,7 +10,9 @@
 //   frame motion covariances of the front end (visual motion estimation, [dtheta, dt] of
 //   T_cur_prev): with Z = T_kf_prev_frame (C) and the frame's motion M = T_cur_prev (C_M),
 //     D = M^-1, C_D = J_inv C_M J_inv^T,   Z' = Z D,   C' = A_1 C A_1^T + A_2 C_D A_2^T
-//   (loop/relative_pose.hpp's inversion and product Jacobians), plus a floor of
+//   (loop/relative_pose.hpp's inversion and product Jacobians); a frame without a motion
+//   estimate, or after frames this front end did not see, contributes the online estimate's
+//   relative pose with gap_rot_sigma_rad / gap_trans_sigma_m; plus a floor of
 //   odometry_floor_rot_rad^2 / odometry_floor_trans_m^2 per keyframe edge (the filter's
 //   relative pose is not exactly the motion chain's, and a skipped frame adds nothing).
 //
@@ -58,6 +60,13 @@ struct LoopCloserParams {
   int max_pcm_candidates = 64;        // verified constraints kept for PCM (newest), 2..1000
   double odometry_floor_rot_rad = 1e-4;   // per keyframe edge, rad, > 0
   double odometry_floor_trans_m = 2e-3;   // per keyframe edge, m, > 0
+  // A frame without a motion estimate, or frames the front end did not see (skipped), enter
+  // the chain as the online estimate's relative pose with these standard deviations, rad / m.
+  double gap_rot_sigma_rad = 0.01;
+  double gap_trans_sigma_m = 0.1;
+  // After the first solution, the graph is re-solved when new loops were accepted and at least
+  // this many keyframes arrived since the last solution (finish() solves what is pending), >= 1.
+  int solve_every_keyframes = 5;
   Status validate() const;
 };
 
@@ -83,6 +92,11 @@ class LoopFrontEnd {
   Status process(const LoopFrameInput& in, bool& made, Keyframe& kf, Matrix6d& odo_cov,
                  Eigen::Isometry3d& odo_T_prev_kf);
   int keyframes() const { return next_id_; }
+  // The frame last given to process(): the last keyframe at or before it (-1: none yet) and
+  // the motion chain from that keyframe to the frame (identity on a keyframe). A corrected
+  // trajectory is T_corrected_kf * T_kf_frame for every frame (LoopCloser::correctedKeyframes).
+  int lastKeyframe() const { return next_id_ - 1; }
+  const Eigen::Isometry3d& chainFromLastKeyframe() const { return T_kf_frame_; }
 
  private:
   LoopCloserParams params_;
@@ -92,12 +106,16 @@ class LoopFrontEnd {
   int next_id_ = 0;
   Eigen::Isometry3d T_kf_frame_ = Eigen::Isometry3d::Identity();  // motion chain since the kf
   Matrix6d C_kf_frame_ = Matrix6d::Zero();
+  std::int64_t last_frame_ = -1;
+  Eigen::Isometry3d T_world_last_ = Eigen::Isometry3d::Identity();  // online, last frame seen
 };
 
 struct AcceptedLoop {
   int query = -1, candidate = -1;  // keyframe ids
   std::int64_t query_frame = 0, candidate_frame = 0;  // their source frame indices
   int inliers = 0;
+  Eigen::Isometry3d T_query_candidate = Eigen::Isometry3d::Identity();  // the measurement
+  Matrix6d covariance = Matrix6d::Identity();                            // [dtheta, dt]
   double chi2_after = 0;  // whitened squared residual in the last solution
 };
 
@@ -123,6 +141,8 @@ class LoopCloser {
   // from the previous keyframe. `optimised` says whether the pose graph was re-solved.
   Status process(Keyframe&& kf, const Matrix6d& odo_cov, const Eigen::Isometry3d& odo_T_prev_kf,
                  bool& optimised);
+  // After the last keyframe: solves the graph if accepted loops are not in the last solution.
+  Status finish(bool& optimised);
 
   const std::vector<Keyframe>& keyframes() const { return keyframes_; }
   // T_world_kf after the last solution; online estimates for keyframes since then are chained
@@ -158,6 +178,8 @@ class LoopCloser {
   std::vector<AcceptedLoop> accepted_;
   std::vector<PlaceCandidate> candidates_;
   LoopCloserStats stats_;
+  bool pending_ = false;       // accepted loops not yet in a solution
+  int solved_keyframes_ = 0;   // keyframes at the last solution
 };
 
 }  // namespace svslam
