@@ -218,7 +218,9 @@ Status LoopStage::finish() {
     const std::int64_t t = traj->t_ns[i];
     while (j < m.links.size() && m.links[j].t_ns < t) ++j;
     Eigen::Isometry3d T;
-    if (j < m.links.size() && m.links[j].t_ns == t &&
+    if (!m.closer->solved()) {
+      T = traj->poses[i];  // no loop closed: the online trajectory
+    } else if (j < m.links.size() && m.links[j].t_ns == t &&
         static_cast<std::size_t>(m.links[j].kf) < kf.size()) {
       Eigen::Isometry3d chain = Eigen::Isometry3d::Identity();
       chain.linear() = m.links[j].q.cast<double>().normalized().toRotationMatrix();

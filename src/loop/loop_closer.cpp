@@ -126,14 +126,15 @@ Status LoopCloser::process(Keyframe&& kf, const Matrix6d& odo_cov,
   if (id > 0) {
     odo_cov_.push_back(odo_cov);
     odo_T_.push_back(odo_T_prev_kf);
+    T_chain_.push_back(T_chain_.back() * odo_T_prev_kf);
+  } else {
+    T_chain_.push_back(kf.T_world_cam);
   }
   T_online_.push_back(kf.T_world_cam);
-  // Chained onto the last corrected keyframe by the odometry until the next solution.
-  T_corrected_.push_back(id == 0 ? kf.T_world_cam
-                                 : Eigen::Isometry3d(T_corrected_.back() *
-                                                     (T_online_[static_cast<std::size_t>(id) - 1]
-                                                          .inverse() *
-                                                      kf.T_world_cam)));
+  // Before any solution the online estimate; after one, chained onto the last corrected
+  // keyframe by the motion chain until the next solution.
+  T_corrected_.push_back(id == 0 || !solved_ ? kf.T_world_cam
+                                             : Eigen::Isometry3d(T_corrected_.back() * odo_T_prev_kf));
   keyframes_.push_back(std::move(kf));
   const Keyframe& q = keyframes_.back();
   ++stats_.keyframes;
@@ -201,7 +202,7 @@ Status LoopCloser::runConsistency(bool& changed) {
     edges.push_back(e);
   }
   LoopConsistencyResult r;
-  if (Status s = consistency_.process(T_online_, odo_cov_, edges, r); !s) return s;
+  if (Status s = consistency_.process(T_chain_, odo_cov_, edges, r); !s) return s;
   int rejected = 0;
   for (LoopDecision d : r.decision) rejected += d != LoopDecision::kAccepted;
   stats_.rejected_consistency = rejected;

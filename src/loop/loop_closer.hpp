@@ -23,7 +23,9 @@
 //  2. each returned candidate is verified (loop/loop_verifier.hpp); a verified constraint gives
 //     the loop edge from = query, to = candidate, T_from_to = T_query_candidate, covariance;
 //  3. PCM (loop/loop_consistency.hpp) over the verified constraints (the most recent
-//     max_pcm_candidates) against the odometry edges: the maximum clique is accepted when it has
+//     max_pcm_candidates) against the odometry edges (the keyframe poses chained from keyframe
+//     0 by the motion chain, not the filter's poses, whose anchor closures jump): the maximum
+//     clique is accepted when it has
 //     at least min_consistent_loops members (a lone look-alike is never enough);
 //  4. when the accepted set gained a member: the pose graph (loop/pose_graph.hpp; odometry edges
 //     between consecutive keyframes, loop edges with the robust loss, keyframe 0 fixed) is
@@ -145,9 +147,10 @@ class LoopCloser {
   Status finish(bool& optimised);
 
   const std::vector<Keyframe>& keyframes() const { return keyframes_; }
-  // T_world_kf after the last solution; online estimates for keyframes since then are chained
-  // onto it by odometry.
+  // T_world_kf after the last solution; keyframes since then are chained onto it by the motion
+  // chain; the online estimates before any solution.
   const std::vector<Eigen::Isometry3d>& correctedKeyframes() const { return T_corrected_; }
+  bool solved() const { return solved_; }  // the graph was solved at least once
   // The correction C (T_corrected = C T_online, world frame) of the online pose at time t_ns:
   // C_k = T_corrected_kf_k T_online_kf_k^-1, interpolated between the keyframes around t_ns
   // (rotation slerp, translation lerp, by time); identity before any solution. O(log N).
@@ -171,6 +174,7 @@ class LoopCloser {
   std::vector<Eigen::Isometry3d> T_online_;  // per keyframe
   std::vector<Matrix6d> odo_cov_;            // edge k: keyframe k -> k + 1
   std::vector<Eigen::Isometry3d> odo_T_;     // edge k: T_k_(k+1) of the motion chain
+  std::vector<Eigen::Isometry3d> T_chain_;   // per keyframe: keyframe 0 then the motion chain
   std::vector<Eigen::Isometry3d> T_corrected_;  // per keyframe (see correctedKeyframes)
   bool solved_ = false;
   std::vector<LoopConstraint> verified_;     // newest max_pcm_candidates
