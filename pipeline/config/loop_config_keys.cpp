@@ -28,6 +28,9 @@ ConfigSection loopConfigSection() {
              "3D-3D inliers of the geometric verification"),
       number("min_consistent_loops", SVSLAM_FIELD(loop.min_consistent_loops), 1, 100, "",
              "mutually consistent loops (PCM) before any is used"),
+      number("filter_edge_chi2", SVSLAM_FIELD(loop.filter_edge_chi2), 0, 1e6, "",
+             "> 0: odometry edges take the filter's relative pose when within this chi-square "
+             "(6 dof) of the motion chain; 0: always the motion chain"),
       number("pair_chi2", SVSLAM_FIELD(loop.consistency.pair_chi2), 1e-3, 1e6, "",
              "chi-square (6 dof) bound of a loop pair's cycle through the odometry"),
   };

@@ -209,9 +209,10 @@ Status LoopStage::finish() {
                         m.out_dir + "/" + run::files::kTrajectoryOptimizedTum);
       !s)
     return s;
-  // A frame the front end saw: its corrected keyframe and the motion chain from it (the filter's
-  // own jumps, e.g. when anchors come back, are not in the chain); a frame it skipped: the
-  // online pose moved by the interpolated keyframe correction.
+  // A frame the front end saw: its corrected keyframe times the online relative pose from it
+  // when the filter's edge from that keyframe was used, else times the motion chain (the filter
+  // jumped there, e.g. when anchors came back; after the last keyframe); a frame it skipped:
+  // the online pose moved by the interpolated keyframe correction.
   const std::vector<Eigen::Isometry3d>& kf = m.closer->correctedKeyframes();
   std::size_t j = 0;
   for (std::size_t i = 0; i < traj->poses.size(); ++i) {
@@ -222,10 +223,15 @@ Status LoopStage::finish() {
       T = traj->poses[i];  // no loop closed: the online trajectory
     } else if (j < m.links.size() && m.links[j].t_ns == t &&
         static_cast<std::size_t>(m.links[j].kf) < kf.size()) {
-      Eigen::Isometry3d chain = Eigen::Isometry3d::Identity();
-      chain.linear() = m.links[j].q.cast<double>().normalized().toRotationMatrix();
-      chain.translation() = m.links[j].t.cast<double>();
-      T = kf[static_cast<std::size_t>(m.links[j].kf)] * chain;
+      const std::size_t k = static_cast<std::size_t>(m.links[j].kf);
+      if (k < m.closer->edges() && !m.closer->chainEdge(k)) {  // the filter agreed: its poses
+        T = kf[k] * m.closer->onlineKeyframe(k).inverse() * traj->poses[i];
+      } else {  // the filter jumped (or after the last keyframe): the motion chain
+        Eigen::Isometry3d chain = Eigen::Isometry3d::Identity();
+        chain.linear() = m.links[j].q.cast<double>().normalized().toRotationMatrix();
+        chain.translation() = m.links[j].t.cast<double>();
+        T = kf[k] * chain;
+      }
     } else {
       T = m.closer->correctionAt(t) * traj->poses[i];
     }
@@ -250,6 +256,7 @@ std::string LoopStage::json() const {
   o.add("rejected_consistency", st.rejected_consistency);
   o.add("loops_accepted", st.accepted);
   o.add("optimisations", st.optimisations);
+  o.add("chain_edges", st.chain_edges);
   o.add("last_max_correction_m", st.last_max_correction_m, 4);
   o.add("corrections_published", m.corrections_published);
   double worst = 0;

@@ -20,6 +20,8 @@ Status LoopCloserParams::validate() const {
   if (!(gap_rot_sigma_rad > 0) || !std::isfinite(gap_rot_sigma_rad) ||
       !(gap_trans_sigma_m > 0) || !std::isfinite(gap_trans_sigma_m))
     return Status::invalidArgument("loop.gap_rot_sigma_rad and _trans_m must be > 0");
+  if (!(filter_edge_chi2 >= 0) || !std::isfinite(filter_edge_chi2))
+    return Status::invalidArgument("loop.filter_edge_chi2 must be >= 0");
   if (solve_every_keyframes < 1)
     return Status::invalidArgument("loop.solve_every_keyframes must be >= 1");
   if (!(odometry_floor_rot_rad > 0) || !std::isfinite(odometry_floor_rot_rad) ||
@@ -124,9 +126,18 @@ Status LoopCloser::process(Keyframe&& kf, const Matrix6d& odo_cov,
   vocabulary_.transform(kf.descriptors, kf.bow);
   const int id = kf.id;
   if (id > 0) {
+    // The edge: the filter's relative pose unless it disagrees with the motion chain.
+    const Eigen::Isometry3d filter_rel = T_online_.back().inverse() * kf.T_world_cam;
+    const Vector6d r =
+        relativePoseResidual(Eigen::Isometry3d::Identity(), filter_rel, odo_T_prev_kf);
+    const double chi2 = r.dot(odo_cov.ldlt().solve(r));
+    const bool chain = !(chi2 < params_.filter_edge_chi2);
+    stats_.chain_edges += chain ? 1 : 0;
+    chain_edge_.push_back(chain ? 1 : 0);
+    const Eigen::Isometry3d edge = chain ? odo_T_prev_kf : filter_rel;
     odo_cov_.push_back(odo_cov);
-    odo_T_.push_back(odo_T_prev_kf);
-    T_chain_.push_back(T_chain_.back() * odo_T_prev_kf);
+    odo_T_.push_back(edge);
+    T_chain_.push_back(T_chain_.back() * edge);
   } else {
     T_chain_.push_back(kf.T_world_cam);
   }
@@ -134,7 +145,7 @@ Status LoopCloser::process(Keyframe&& kf, const Matrix6d& odo_cov,
   // Before any solution the online estimate; after one, chained onto the last corrected
   // keyframe by the motion chain until the next solution.
   T_corrected_.push_back(id == 0 || !solved_ ? kf.T_world_cam
-                                             : Eigen::Isometry3d(T_corrected_.back() * odo_T_prev_kf));
+                                             : Eigen::Isometry3d(T_corrected_.back() * odo_T_.back()));
   keyframes_.push_back(std::move(kf));
   const Keyframe& q = keyframes_.back();
   ++stats_.keyframes;

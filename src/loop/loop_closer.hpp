@@ -17,6 +17,8 @@
 //   relative pose is not exactly the motion chain's, and a skipped frame adds nothing).
 //
 // LoopCloser (the back-end thread, one call per keyframe):
+//  0. odometry edge from the previous keyframe: the motion chain, or (filter_edge_chi2 > 0) the
+//     online estimate's relative pose when it agrees with the chain;
 //  1. BoW vector of the keyframe (loop/binary_vocabulary.hpp); place query (loop/place_database
 //     .hpp: inverted index, normalised score, islands, temporal consistency), then the keyframe
 //     is added;
@@ -69,6 +71,11 @@ struct LoopCloserParams {
   // After the first solution, the graph is re-solved when new loops were accepted and at least
   // this many keyframes arrived since the last solution (finish() solves what is pending), >= 1.
   int solve_every_keyframes = 5;
+  // Odometry edge: the online estimate's relative pose between the two keyframes when it agrees
+  // with the motion chain (Mahalanobis^2 under the chain's covariance below this), else the
+  // chain (the filter jumped, e.g. when first-frame anchors came back: a jump inside an edge
+  // would pin the drift). 0 = always the chain (default: docs/loop_closing.md has both). >= 0.
+  double filter_edge_chi2 = 0.0;
   Status validate() const;
 };
 
@@ -132,6 +139,7 @@ struct LoopCloserStats {
   int optimisations = 0;
   int last_optimisation_keyframes = 0;
   double last_max_correction_m = 0;  // largest keyframe translation change, last solution
+  int chain_edges = 0;  // odometry edges taken from the motion chain (the filter disagreed)
 };
 
 class LoopCloser {
@@ -151,6 +159,12 @@ class LoopCloser {
   // chain; the online estimates before any solution.
   const std::vector<Eigen::Isometry3d>& correctedKeyframes() const { return T_corrected_; }
   bool solved() const { return solved_; }  // the graph was solved at least once
+  // Whether odometry edge k (keyframe k -> k + 1) came from the motion chain (false: from the
+  // online estimate; also false for an edge not there yet).
+  bool chainEdge(std::size_t k) const { return k < chain_edge_.size() && chain_edge_[k] != 0; }
+  std::size_t edges() const { return chain_edge_.size(); }
+  // Online estimate of keyframe k when it was made.
+  const Eigen::Isometry3d& onlineKeyframe(std::size_t k) const { return T_online_[k]; }
   // The correction C (T_corrected = C T_online, world frame) of the online pose at time t_ns:
   // C_k = T_corrected_kf_k T_online_kf_k^-1, interpolated between the keyframes around t_ns
   // (rotation slerp, translation lerp, by time); identity before any solution. O(log N).
@@ -174,7 +188,8 @@ class LoopCloser {
   std::vector<Eigen::Isometry3d> T_online_;  // per keyframe
   std::vector<Matrix6d> odo_cov_;            // edge k: keyframe k -> k + 1
   std::vector<Eigen::Isometry3d> odo_T_;     // edge k: T_k_(k+1) of the motion chain
-  std::vector<Eigen::Isometry3d> T_chain_;   // per keyframe: keyframe 0 then the motion chain
+  std::vector<Eigen::Isometry3d> T_chain_;   // per keyframe: keyframe 0 then the odometry edges
+  std::vector<std::uint8_t> chain_edge_;     // per edge: 1 = from the motion chain
   std::vector<Eigen::Isometry3d> T_corrected_;  // per keyframe (see correctedKeyframes)
   bool solved_ = false;
   std::vector<LoopConstraint> verified_;     // newest max_pcm_candidates
