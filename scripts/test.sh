@@ -7,11 +7,13 @@ cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
 if [ "${TSAN:-0}" = "1" ]; then
   # ThreadSanitizer over the tests that run threads: the pipeline (edges, runner, svslam run
-  # threaded vs sequential, service, LCM between processes), the executor and the LCM transport.
+  # threaded vs sequential, service, LCM between processes, loop closing's back-end thread), the
+  # executor and the LCM transport.
   BUILD_DIR=${BUILD_DIR:-build-tsan}
   targets=(svslam pipeline_realtime_pipeline_test pipeline_executor_test pipeline_service_test
-           pipeline_lcm_pipeline_test drivers_lcm_transport_test drivers_lcm_source_test)
-  # No precompiled headers here: seven targets gain little from them.
+           pipeline_lcm_pipeline_test drivers_lcm_transport_test drivers_lcm_source_test
+           pipeline_cli_loop_test)
+  # No precompiled headers here: eight targets gain little from them.
   cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" \
         -DSVSLAM_WERROR=ON -DSVSLAM_TSAN=ON \
         -DSVSLAM_BUILD_BENCH=OFF -DSVSLAM_PCH=OFF
