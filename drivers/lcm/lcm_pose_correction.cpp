@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <exception>
+#include <limits>
 
 #include "svslam_lcm/pose_correction_t.hpp"
 
@@ -20,6 +21,12 @@ std::int32_t readI32(const std::uint8_t* p) {
 }
 
 Status corrupt(const std::string& m) { return Status::corruptData(std::string(kWhat) + ": " + m); }
+
+// A time in microseconds that converts to int64 nanoseconds without overflow.
+bool utimeFits(std::int64_t us) {
+  constexpr std::int64_t kMax = std::numeric_limits<std::int64_t>::max() / 1000;
+  return us >= -kMax && us <= kMax;
+}
 
 bool rigid(const Eigen::Isometry3d& T) {
   if (!T.matrix().allFinite()) return false;
@@ -93,6 +100,7 @@ Status decodePoseCorrection(const std::uint8_t* data, std::size_t size, PoseCorr
     return corrupt(std::string("cannot decode: ") + e.what());
   }
   if (w.parts < 1 || w.part < 0 || w.part >= w.parts) return corrupt("part out of range");
+  if (!utimeFits(w.utime)) return corrupt("utime out of range");
   PoseCorrectionMessage m;
   m.t_ns = w.utime * 1000;
   m.correction_seq = w.correction_seq;
@@ -107,6 +115,8 @@ Status decodePoseCorrection(const std::uint8_t* data, std::size_t size, PoseCorr
     if (p.size() != 3 || o.size() != 4) return corrupt("malformed keyframe arrays");
     const Eigen::Quaterniond q(o[0], o[1], o[2], o[3]);
     const Eigen::Vector3d t(p[0], p[1], p[2]);
+    if (!utimeFits(w.keyframe_utime[static_cast<std::size_t>(k)]))
+      return corrupt("keyframe " + std::to_string(k) + ": keyframe_utime out of range");
     if (!t.allFinite() || !q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-6)
       return corrupt("keyframe " + std::to_string(k) + ": non-finite value or non-unit quaternion");
     Eigen::Isometry3d C = Eigen::Isometry3d::Identity();

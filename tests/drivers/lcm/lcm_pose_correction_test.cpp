@@ -91,6 +91,10 @@ TEST(LcmPoseCorrectionTest, UntrustedBytesNeverCrash) {
   std::vector<std::uint8_t> bad = good;
   bad[bad.size() - 8] ^= 0x40;  // the exponent of the last quaternion component
   EXPECT_FALSE(decodePoseCorrection(bad.data(), bad.size(), out).isOk());
+  // A time whose nanoseconds overflow int64 (utime = bytes 8..15, big-endian).
+  std::vector<std::uint8_t> late = good;
+  late[8] = 0x7f;
+  EXPECT_EQ(decodePoseCorrection(late.data(), late.size(), out).code(), StatusCode::kCorruptData);
   std::mt19937 rng(5);
   for (int i = 0; i < 2000; ++i) {
     std::vector<std::uint8_t> b = good;
