@@ -5,6 +5,7 @@
 // configuration gives a clear error and a non-zero exit.
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
