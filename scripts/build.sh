@@ -5,7 +5,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
-extra=()
+# shellcheck source=scripts/ccache_env.sh
+source scripts/ccache_env.sh
+extra=("${ccache_args[@]}")
 if [ "${SANITIZE:-0}" = "1" ]; then
   extra+=(-DSVSLAM_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo
           "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" -DSVSLAM_BUILD_BENCH=OFF)

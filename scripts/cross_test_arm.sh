@@ -27,6 +27,8 @@
 set -euo pipefail
 
 src_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# shellcheck source=scripts/ccache_env.sh
+source "$src_dir/scripts/ccache_env.sh"
 # Default build trees live in this checkout (build-cross/, ignored by git): a tree shared between
 # checkouts would hold a CMake cache of another source folder and fail to configure.
 build_root="${SVSLAM_CROSS_BUILD_ROOT:-$src_dir/build-cross}"
@@ -100,7 +102,8 @@ for t in "${targets[@]}"; do
   echo "== $t: configure in $build"
   if ! cmake -S "$src_dir" -B "$build" -DCMAKE_TOOLCHAIN_FILE="$src_dir/toolchains/$toolchain" \
       -DCMAKE_BUILD_TYPE=Release -DSVSLAM_WERROR=ON \
-      -DSVSLAM_BUILD_TOOLS=OFF -DSVSLAM_BUILD_BENCH=OFF -DSVSLAM_BUILD_TESTS=ON > "$build.configure.log" 2>&1; then
+      -DSVSLAM_BUILD_TOOLS=OFF -DSVSLAM_BUILD_BENCH=OFF -DSVSLAM_BUILD_TESTS=ON "${ccache_args[@]}" \
+      > "$build.configure.log" 2>&1; then
     cat "$build.configure.log" >&2
     failed+=("$t (configure)"); continue
   fi

@@ -10,13 +10,14 @@ if [ "${TSAN:-0}" = "1" ]; then
   # threaded vs sequential, service, LCM between processes, loop closing's back-end thread), the
   # executor and the LCM transport.
   BUILD_DIR=${BUILD_DIR:-build-tsan}
+  source scripts/ccache_env.sh
   targets=(svslam pipeline_realtime_pipeline_test pipeline_executor_test pipeline_service_test
            pipeline_lcm_pipeline_test drivers_lcm_transport_test drivers_lcm_source_test
            pipeline_cli_loop_test)
   # No precompiled headers here: eight targets gain little from them.
   cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" \
         -DSVSLAM_WERROR=ON -DSVSLAM_TSAN=ON \
-        -DSVSLAM_BUILD_BENCH=OFF -DSVSLAM_PCH=OFF
+        -DSVSLAM_BUILD_BENCH=OFF -DSVSLAM_PCH=OFF "${ccache_args[@]}"
   cmake --build "$BUILD_DIR" -j "$(nproc)" --target "${targets[@]}"
   export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp}
   regex="^($(IFS='|'; echo "${targets[*]:1}"))\\."
