@@ -33,6 +33,9 @@ ConfigSection loopConfigSection() {
              "(6 dof) of the motion chain; 0: always the motion chain"),
       number("pair_chi2", SVSLAM_FIELD(loop.consistency.pair_chi2), 1e-3, 1e6, "",
              "chi-square (6 dof) bound of a loop pair's cycle through the odometry"),
+      number("wrong_loop_fraction", SVSLAM_FIELD(loop.wrong_loop_fraction), 0, 0.5, "",
+             "test hook: share of verified loops re-attached to a wrong keyframe (seeded by "
+             "seed); 0 in any real use"),
   };
   return s;
 }

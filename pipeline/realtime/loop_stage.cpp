@@ -152,6 +152,7 @@ Status LoopStage::init() {
   m.vocabulary_words = m.vocabulary->numWords();
   LoopCloserParams p = m.cfg.loop;
   p.verify.motion.seed = m.cfg.seed;
+  p.wrong_loop_seed = static_cast<std::uint32_t>(m.cfg.seed ^ 0x9e3779b9u);
   m.front = std::make_unique<LoopFrontEnd>(p, m.source.calibration());
   if (Status s = m.front->initStatus(); !s) return s;
   m.closer = std::make_unique<LoopCloser>(p, *m.vocabulary);
@@ -257,6 +258,10 @@ std::string LoopStage::json() const {
   o.add("loops_accepted", st.accepted);
   o.add("optimisations", st.optimisations);
   o.add("chain_edges", st.chain_edges);
+  if (m.cfg.loop.wrong_loop_fraction > 0) {
+    o.add("injected_wrong", st.injected_wrong);
+    o.add("injected_wrong_accepted", st.injected_wrong_accepted);
+  }
   o.add("last_max_correction_m", st.last_max_correction_m, 4);
   o.add("corrections_published", m.corrections_published);
   double worst = 0;

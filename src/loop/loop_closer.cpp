@@ -20,6 +20,8 @@ Status LoopCloserParams::validate() const {
   if (!(gap_rot_sigma_rad > 0) || !std::isfinite(gap_rot_sigma_rad) ||
       !(gap_trans_sigma_m > 0) || !std::isfinite(gap_trans_sigma_m))
     return Status::invalidArgument("loop.gap_rot_sigma_rad and _trans_m must be > 0");
+  if (!(wrong_loop_fraction >= 0 && wrong_loop_fraction <= 0.5))
+    return Status::invalidArgument("loop.wrong_loop_fraction must be in [0, 0.5]");
   if (!(filter_edge_chi2 >= 0) || !std::isfinite(filter_edge_chi2))
     return Status::invalidArgument("loop.filter_edge_chi2 must be >= 0");
   if (solve_every_keyframes < 1)
@@ -97,7 +99,8 @@ LoopCloser::LoopCloser(const LoopCloserParams& params, const BinaryVocabulary& v
       places_(params.place, 0, static_cast<std::size_t>(vocabulary.numWords())),
       verifier_(params.verify),
       consistency_(params.consistency),
-      graph_(params.graph) {
+      graph_(params.graph),
+      wrong_rng_(params.wrong_loop_seed) {
   init_status_ = params.validate();
   if (init_status_) init_status_ = places_.initStatus();
   if (init_status_) init_status_ = verifier_.initStatus();
@@ -165,6 +168,7 @@ Status LoopCloser::process(Keyframe&& kf, const Matrix6d& odo_cov,
       continue;
     }
     ++stats_.verified;
+    injectWrongLoop(id, lc);
     verified_.push_back(lc);
     new_verified = true;
     break;  // one constraint per query: the best verified candidate of the island
@@ -189,6 +193,20 @@ Status LoopCloser::finish(bool& optimised) {
   if (Status s = optimise(); !s) return s;
   optimised = true;
   return Status::ok();
+}
+
+void LoopCloser::injectWrongLoop(int query, LoopConstraint& lc) {
+  if (params_.wrong_loop_fraction <= 0) return;
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  if (u(wrong_rng_) >= params_.wrong_loop_fraction) return;
+  const int last = query - params_.place.exclude_recent - 1;  // last keyframe a query may return
+  if (last < 1) return;
+  std::uniform_int_distribution<int> pick(0, last - 1);
+  int wrong = pick(wrong_rng_);
+  if (wrong >= lc.candidate) ++wrong;  // any keyframe in 0..last but the verified one
+  lc.candidate = wrong;
+  injected_.emplace_back(lc.query, lc.candidate);
+  ++stats_.injected_wrong;
 }
 
 Status LoopCloser::runConsistency(bool& changed) {
@@ -230,6 +248,9 @@ Status LoopCloser::runConsistency(bool& changed) {
     a.covariance = set[static_cast<std::size_t>(i)].covariance;
     a.query_frame = keyframes_[static_cast<std::size_t>(a.query)].frame;
     a.candidate_frame = keyframes_[static_cast<std::size_t>(a.candidate)].frame;
+    a.injected = std::find(injected_.begin(), injected_.end(),
+                           std::make_pair(a.query, a.candidate)) != injected_.end();
+    stats_.injected_wrong_accepted += a.injected;
     accepted_.push_back(a);
     changed = true;
   }

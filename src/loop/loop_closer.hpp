@@ -38,7 +38,9 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <memory>
+#include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/camera.hpp"
@@ -76,6 +78,13 @@ struct LoopCloserParams {
   // chain (the filter jumped, e.g. when first-frame anchors came back: a jump inside an edge
   // would pin the drift). 0 = always the chain (default: docs/loop_closing.md has both). >= 0.
   double filter_edge_chi2 = 0.0;
+  // Test hook (fault injection): this share of the verified loop constraints, drawn with a
+  // generator seeded by wrong_loop_seed, is replaced by a wrong one: the same measurement
+  // (relative pose and covariance) attached to another keyframe, drawn uniformly among those the
+  // place database could have returned (a perceptual-aliasing false positive that passed
+  // verification). 0 = off (default), at most 0.5.
+  double wrong_loop_fraction = 0.0;
+  std::uint32_t wrong_loop_seed = 1;
   Status validate() const;
 };
 
@@ -126,6 +135,7 @@ struct AcceptedLoop {
   Eigen::Isometry3d T_query_candidate = Eigen::Isometry3d::Identity();  // the measurement
   Matrix6d covariance = Matrix6d::Identity();                            // [dtheta, dt]
   double chi2_after = 0;  // whitened squared residual in the last solution
+  bool injected = false;  // a wrong constraint made by the wrong_loop_fraction test hook
 };
 
 struct LoopCloserStats {
@@ -140,6 +150,8 @@ struct LoopCloserStats {
   int last_optimisation_keyframes = 0;
   double last_max_correction_m = 0;  // largest keyframe translation change, last solution
   int chain_edges = 0;  // odometry edges taken from the motion chain (the filter disagreed)
+  int injected_wrong = 0;           // wrong constraints made by the test hook
+  int injected_wrong_accepted = 0;  // of those, in the accepted set
 };
 
 class LoopCloser {
@@ -176,6 +188,8 @@ class LoopCloser {
  private:
   Status runConsistency(bool& changed);
   Status optimise();
+  // The wrong_loop_fraction test hook: maybe re-attach `lc` to a wrong keyframe.
+  void injectWrongLoop(int query, LoopConstraint& lc);
 
   LoopCloserParams params_;
   const BinaryVocabulary& vocabulary_;
@@ -197,6 +211,8 @@ class LoopCloser {
   std::vector<AcceptedLoop> accepted_;
   std::vector<PlaceCandidate> candidates_;
   LoopCloserStats stats_;
+  std::mt19937 wrong_rng_;     // the wrong_loop_fraction test hook's draws
+  std::vector<std::pair<int, int>> injected_;  // (query, candidate) of the injected constraints
   bool pending_ = false;       // accepted loops not yet in a solution
   int solved_keyframes_ = 0;   // keyframes at the last solution
 };

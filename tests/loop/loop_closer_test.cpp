@@ -57,15 +57,19 @@ struct Outcome {
   std::vector<AcceptedLoop> loops;
   std::vector<Eigen::Isometry3d> corrected, online, truth;
   std::vector<std::int64_t> frames;
+  LoopCloserStats stats;
 };
 
 // Keyframes every 3rd frame of two 60-frame laps over a 60 m loop; online poses chained from
 // noisy relative poses (sigma 2 mrad, 2 cm per keyframe edge).
-Outcome run(const BinaryVocabulary& voc) {
+// wrong_fraction: the test hook re-attaching that share of the verified loops to wrong keyframes.
+Outcome run(const BinaryVocabulary& voc, double wrong_fraction = 0) {
   drivers::SyntheticFlight f(flight(3, 120, 60, 60));
   DenseStereo dense(denseParams(), 320, 240);
   LoopCloserParams p;
   p.place.exclude_recent = 8;
+  p.wrong_loop_fraction = wrong_fraction;
+  p.wrong_loop_seed = 5;
   LoopCloser closer(p, voc);
   EXPECT_TRUE(closer.initStatus().isOk()) << closer.initStatus().message();
   KeyframeBuilder builder(p.keyframe, f.calibration());
@@ -109,6 +113,7 @@ Outcome run(const BinaryVocabulary& voc) {
   EXPECT_TRUE(closer.finish(optimised).isOk());
   o.loops = closer.acceptedLoops();
   o.corrected = closer.correctedKeyframes();
+  o.stats = closer.stats();
   return o;
 }
 
@@ -119,13 +124,10 @@ double ate(const std::vector<Eigen::Isometry3d>& est, const std::vector<Eigen::I
   return std::sqrt(s / static_cast<double>(est.size()));
 }
 
-TEST(LoopCloserTest, SecondLapLoopsAreTrueAndRemoveTheDrift) {
-  const BinaryVocabulary voc = trainVocabulary();
-  const Outcome o = run(voc);
-  ASSERT_GE(o.loops.size(), 4u);
+// Every accepted loop of `o` agrees with the true relative pose within its covariance.
+void expectTrueLoops(const Outcome& o) {
   for (const AcceptedLoop& a : o.loops) {
-    // A true loop: the measured relative pose agrees with the true one within its covariance
-    // (chi2 6 dof, 99.9 % = 22.46).
+    // chi2 6 dof, 99.9 % = 22.46.
     const Eigen::Isometry3d truth = o.truth[static_cast<std::size_t>(a.query)].inverse() *
                                     o.truth[static_cast<std::size_t>(a.candidate)];
     const Vector6d r = relativePoseResidual(Eigen::Isometry3d::Identity(), truth,
@@ -133,7 +135,15 @@ TEST(LoopCloserTest, SecondLapLoopsAreTrueAndRemoveTheDrift) {
     const double nees = r.dot(a.covariance.ldlt().solve(r));
     EXPECT_LT(nees, 22.46) << "false loop " << a.query << " -> " << a.candidate << ", error "
                            << r.transpose() << ", " << a.inliers << " inliers";
+    EXPECT_FALSE(a.injected);
   }
+}
+
+TEST(LoopCloserTest, SecondLapLoopsAreTrueAndRemoveTheDrift) {
+  const BinaryVocabulary voc = trainVocabulary();
+  const Outcome o = run(voc);
+  ASSERT_GE(o.loops.size(), 4u);
+  expectTrueLoops(o);
   const double before = ate(o.online, o.truth), after = ate(o.corrected, o.truth);
   std::printf("keyframe ATE online %.3f m, corrected %.3f m, %zu loops\n", before, after,
               o.loops.size());
@@ -143,6 +153,18 @@ TEST(LoopCloserTest, SecondLapLoopsAreTrueAndRemoveTheDrift) {
   ASSERT_EQ(again.corrected.size(), o.corrected.size());
   for (std::size_t k = 0; k < o.corrected.size(); ++k)
     EXPECT_TRUE(again.corrected[k].matrix() == o.corrected[k].matrix());
+
+  // Robustness: a tenth of the verified loops re-attached to wrong keyframes (the test hook;
+  // the issue asks for 5 %, more here to inject more than one in 40 keyframes): PCM accepts
+  // none of them, and the corrected trajectory's error moves by less than 5 %.
+  const Outcome faulty = run(voc, 0.10);
+  EXPECT_GE(faulty.stats.injected_wrong, 2);
+  EXPECT_EQ(faulty.stats.injected_wrong_accepted, 0);
+  expectTrueLoops(faulty);
+  const double after_faulty = ate(faulty.corrected, faulty.truth);
+  std::printf("with %d wrong loops injected: corrected %.4f m (clean %.4f m)\n",
+              faulty.stats.injected_wrong, after_faulty, after);
+  EXPECT_LT(std::abs(after_faulty - after), 0.05 * after);
 }
 
 TEST(LoopCloserTest, FrontEndChainsMotionCovariances) {
