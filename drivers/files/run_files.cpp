@@ -305,7 +305,8 @@ Status writePlotPng(const std::string& path, const cv::Mat& bgr) {
     return Status::invalidArgument("cannot write " + path + ": not an 8-bit colour image");
   std::vector<unsigned char> buf;
   try {
-    if (!cv::imencode(".png", bgr, buf)) return Status::ioError("cannot encode PNG for " + path);
+    if (!cv::imencode(".png", bgr, buf, {cv::IMWRITE_PNG_COMPRESSION, 9}))
+      return Status::ioError("cannot encode PNG for " + path);
   } catch (const std::exception& e) {
     return Status::ioError("cannot encode PNG for " + path + ": " + e.what());
   }

@@ -102,8 +102,8 @@ Result<Figure> trajectoryTopFigure(const RunPlotData& d, const PlotSettings& s, 
       ++drawn;
     }
     f.caption =
-        "pose_covariance.txt: k = 2 ellipses of the horizontal 2x2 position covariance "
-        "(86.5 % in 2-D), largest semi-axis " +
+        "k = 2 ellipses of the horizontal position covariance (86.5 % in 2-D); largest "
+        "semi-axis " +
         fmt("%.3g m", largest_m);
   } else {
     f.caption = "no pose_covariance.txt (vo mode): no uncertainty ellipses";

@@ -62,6 +62,12 @@ PathItem line(double x0, double y0, double x1, double y1, Rgb c, double w, const
   return p;
 }
 
+// `size` or less, so that `text` fits in `room` pixels.
+double fitted(const std::string& text, double size, double room) {
+  const double w = textWidthPx(text, size);
+  return w > room ? size * room / w : size;
+}
+
 struct LegendEntry {
   std::string label;
   Rgb color;
@@ -96,6 +102,13 @@ void layoutPanel(const Panel& p, double top, double height, int width, Scene& s)
   const double plot_right = width - 18.0;
   double w = plot_right - plot_left, h = plot_bottom - plot_top;
   if (w < 10 || h < 10) return;
+  // Room above the data for the legend (a bar chart's legend finds a free corner instead).
+  std::size_t legend_n = p.legend_swatches.size();
+  for (const auto& se : p.series) legend_n += se.label.empty() ? 0 : 1;
+  if (legend_n > 0 && p.y_categories.empty()) {
+    const double frac = std::min(0.5, (8 + 17.0 * legend_n + 14) / h);
+    yr.hi += yr.span() * frac / (1 - frac);
+  }
 
   if (p.equal_aspect) {  // widen the range with more room per metre
     const double sx = w / xr.span(), sy = h / yr.span();
@@ -114,9 +127,11 @@ void layoutPanel(const Panel& p, double top, double height, int width, Scene& s)
 
   // Titles, grid, ticks, axis labels.
   const double cx = 0.5 * (plot_left + plot_right);
-  s.items.push_back(text(cx, top + 17, p.title, kTitleSize, A::kMiddle));
+  s.items.push_back(
+      text(cx, top + 17, p.title, fitted(p.title, kTitleSize, width - 8.0), A::kMiddle));
   if (!p.note.empty())
-    s.items.push_back(text(cx, top + 32, p.note, kTickSize, A::kMiddle, kNoteColor));
+    s.items.push_back(
+        text(cx, top + 32, p.note, fitted(p.note, kTickSize, width - 8.0), A::kMiddle, kNoteColor));
   for (double v : xt.values) {
     s.items.push_back(line(X(v), plot_top, X(v), plot_bottom, kGrid, 1, "grid"));
     s.items.push_back(line(X(v), plot_bottom, X(v), plot_bottom + 4, kFrame, 1, "tick"));
@@ -141,6 +156,7 @@ void layoutPanel(const Panel& p, double top, double height, int width, Scene& s)
 
   // Data: bars, then series in order.
   std::vector<Eigen::Vector2d> all_px;
+  std::vector<RectItem> bar_rects;
   for (const auto& b : p.bars) {
     RectItem r;
     const double x0 = X(std::min(0.0, b.value)), x1 = X(std::max(0.0, b.value));
@@ -148,6 +164,7 @@ void layoutPanel(const Panel& p, double top, double height, int width, Scene& s)
     r.y = Y(b.hi), r.h = std::max(Y(b.lo) - Y(b.hi), 1.0);
     r.fill = b.color;
     s.items.push_back(r);
+    bar_rects.push_back(r);
     all_px.emplace_back(x1, 0.5 * (Y(b.lo) + Y(b.hi)));
   }
   std::vector<LegendEntry> legend;
@@ -201,6 +218,9 @@ void layoutPanel(const Panel& p, double top, double height, int width, Scene& s)
     for (const auto& q : all_px)
       hidden += q.x() >= corners[c].x() && q.x() <= corners[c].x() + bw &&
                 q.y() >= corners[c].y() && q.y() <= corners[c].y() + bh;
+    for (const auto& r : bar_rects)  // a bar under the box hides it, counted as many points
+      hidden += 100 * (r.x < corners[c].x() + bw && r.x + r.w > corners[c].x() &&
+                       r.y < corners[c].y() + bh && r.y + r.h > corners[c].y());
     if (hidden < best_hidden) best = c, best_hidden = hidden;
   }
   RectItem box;
@@ -242,12 +262,14 @@ Scene layoutFigure(const Figure& f) {
   RectItem bg;
   bg.w = f.width_px, bg.h = f.height_px, bg.fill = kWhite;
   s.items.push_back(bg);
-  s.items.push_back(
-      text(0.5 * f.width_px, 24, f.title, kFigureTitleSize, TextItem::Anchor::kMiddle));
+  s.items.push_back(text(0.5 * f.width_px, 24, f.title,
+                         fitted(f.title, kFigureTitleSize, f.width_px - 8.0),
+                         TextItem::Anchor::kMiddle));
   const double top = 32;
   const double bottom = f.height_px - (f.caption.empty() ? 4.0 : 22.0);
   if (!f.caption.empty())
-    s.items.push_back(text(0.5 * f.width_px, f.height_px - 8.0, f.caption, kTickSize,
+    s.items.push_back(text(0.5 * f.width_px, f.height_px - 8.0, f.caption,
+                           fitted(f.caption, kTickSize, f.width_px - 8.0),
                            TextItem::Anchor::kMiddle, kNoteColor));
   if (f.panels.empty()) return s;
   const double ph = (bottom - top) / static_cast<double>(f.panels.size());
