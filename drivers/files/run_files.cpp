@@ -1,5 +1,6 @@
 #include "drivers/files/run_files.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -275,7 +276,8 @@ Result<std::vector<StageTimeSummary>> readStageTimes(const std::string& stats_js
     s.p50_ms = numberOr(v, "p50_ms", NAN);
     s.p99_ms = numberOr(v, "p99_ms", NAN);
     s.max_ms = numberOr(v, "max_ms", NAN);
-    s.count = static_cast<std::int64_t>(numberOr(v, "count", 0));
+    const double count = numberOr(v, "count", 0);
+    s.count = std::isfinite(count) ? static_cast<std::int64_t>(std::clamp(count, 0.0, 1e15)) : 0;
     out.push_back(s);
   }
   return out;

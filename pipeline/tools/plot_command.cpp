@@ -162,6 +162,7 @@ int runPlot(const std::vector<std::string>& args) {
   auto skip = [&](const std::string& why) {
     skipped += (skipped.size() > 1 ? ", " : "") + jsonEscape(why);
   };
+  if (d.cov_p.empty()) skip("ellipses: no pose_covariance.txt in the run folder (vo mode)");
   const fs::path ply = run / run::files::kLandmarks;
   if (isFile(ply)) {
     auto l = drivers::readLandmarksPly(ply.string());

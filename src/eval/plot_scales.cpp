@@ -56,7 +56,7 @@ Ticks niceTicks(double lo, double hi, int target) {
   target = std::max(target, 2);
   t.step = niceStep((hi - lo) / (target - 1));
   t.values = multiples(lo, hi, t.step);
-  while (t.values.size() < 2) {
+  for (int k = 0; k < 8 && t.values.size() < 2; ++k) {
     t.step = smallerStep(t.step);
     t.values = multiples(lo, hi, t.step);
   }

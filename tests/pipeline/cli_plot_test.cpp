@@ -230,6 +230,7 @@ TEST_F(CliPlot, MissingOptionalFilesAreSkippedWithAReason) {
   EXPECT_NE(out.find("no landmarks.ply"), std::string::npos) << out;
   EXPECT_NE(out.find("no stats.json"), std::string::npos) << out;
   EXPECT_NE(out.find("\"ellipses\": 0"), std::string::npos) << out;
+  EXPECT_NE(out.find("no pose_covariance.txt"), std::string::npos) << out;
   EXPECT_TRUE(fs::exists(run / "trajectory_top.png"));
   EXPECT_FALSE(fs::exists(run / "landmarks.png"));
 }

@@ -217,10 +217,10 @@ Figure latencyFigure(const RunPlotData& d, const PlotSettings& s) {
     const Ticks t = niceTicks(*mn, *mx + 1e-9, 30);
     const double bin = t.step > 0 ? t.step : 1.0;
     const double lo = std::floor(*mn / bin) * bin;
-    const int nb = std::max(1, static_cast<int>(std::ceil((*mx - lo) / bin + 1e-9)));
+    const int nb = static_cast<int>(std::clamp(std::ceil((*mx - lo) / bin + 1e-9), 1.0, 1000.0));
     std::vector<int> counts(static_cast<std::size_t>(nb), 0);
     for (double v : d.latency_ms)
-      ++counts[static_cast<std::size_t>(std::clamp(static_cast<int>((v - lo) / bin), 0, nb - 1))];
+      ++counts[static_cast<std::size_t>(std::clamp((v - lo) / bin, 0.0, nb - 1.0))];
     Series hist = line("latency_histogram", "", kEstimate, 1.5);
     hist.xy.emplace_back(lo, 0);
     for (int b = 0; b < nb; ++b) {
