@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,34 @@ namespace svslam::drivers {
 namespace {
 
 std::string where(const std::string& path, int line) { return path + ":" + std::to_string(line); }
+
+// A time written as [-]SECONDS[.FRACTION] with at most 9 fraction digits, read exactly into
+// nanoseconds (a double holds about 16 digits: 1.4e9 s to the nanosecond needs 19). False for any
+// other form (exponent, more digits, out of int64 range): the caller uses the double value.
+bool exactSecondsToNs(const std::string& tok, std::int64_t& t_ns) {
+  std::size_t i = 0;
+  const bool negative = !tok.empty() && tok[0] == '-';
+  if (negative || (!tok.empty() && tok[0] == '+')) i = 1;
+  std::int64_t whole = 0;
+  std::size_t digits = 0;
+  for (; i < tok.size() && tok[i] >= '0' && tok[i] <= '9'; ++i, ++digits) {
+    if (whole > (INT64_MAX / 1000000000 - 9) / 10) return false;  // whole s * 1e9 must fit
+    whole = whole * 10 + (tok[i] - '0');
+  }
+  std::int64_t frac = 0;
+  int frac_digits = 0;
+  if (i < tok.size() && tok[i] == '.') {
+    for (++i; i < tok.size() && tok[i] >= '0' && tok[i] <= '9'; ++i, ++frac_digits) {
+      if (frac_digits == 9) return false;
+      frac = frac * 10 + (tok[i] - '0');
+    }
+  }
+  if (i != tok.size() || digits + static_cast<std::size_t>(frac_digits) == 0) return false;
+  for (int k = frac_digits; k < 9; ++k) frac *= 10;
+  t_ns = whole * 1000000000 + frac;
+  if (negative) t_ns = -t_ns;
+  return true;
+}
 
 }  // namespace
 
@@ -32,8 +61,9 @@ Result<TrajectoryFile> readTrajectory(const std::string& path) {
       if (c == ',') c = ' ';
     std::istringstream s(line);
     std::vector<double> v;
-    std::string tok;
+    std::string tok, first_tok;
     while (s >> tok) {
+      if (v.empty()) first_tok = tok;
       char* end = nullptr;
       const double d = std::strtod(tok.c_str(), &end);
       if (end == tok.c_str() || *end != '\0')
@@ -83,7 +113,12 @@ Result<TrajectoryFile> readTrajectory(const std::string& path) {
       if (!(std::abs(v[0]) < (v[0] > 1e12 ? 9.2e18 : 9.2e9)))  // int64 ns: +-9.22e18
         return Status::corruptData(where(path, line_no) + ": time stamp " + std::to_string(v[0]) +
                                    " is out of range (|t| < 9.2e9 s, or < 9.2e18 ns)");
-      out.t_ns.push_back(v[0] > 1e12 ? static_cast<TimeNs>(std::llround(v[0])) : secondsToNs(v[0]));
+      std::int64_t exact_ns = 0;
+      if (v[0] <= 1e12 && exactSecondsToNs(first_tok, exact_ns))
+        out.t_ns.push_back(exact_ns);  // seconds with up to 9 decimals: to the nanosecond
+      else
+        out.t_ns.push_back(v[0] > 1e12 ? static_cast<TimeNs>(std::llround(v[0]))
+                                       : secondsToNs(v[0]));
     }
     out.poses.push_back(T);
   }

@@ -45,6 +45,24 @@ TEST_F(TrajectoryIo, ReadsKittiAndTum) {
   EXPECT_NEAR(t->poses[1].linear()(1, 0), 1.0, 1e-6);  // 90 deg about z
 }
 
+// TUM times in seconds with up to nine decimals (as svslam writes them) are read to the
+// nanosecond: a double alone would be about 240 ns off at EuRoC's 1.4e9 s.
+TEST_F(TrajectoryIo, TumSecondsAreReadToTheNanosecond) {
+  auto t = readTrajectory(write("ns.txt",
+                                "1403636584.763555765 0 0 0 0 0 0 1\n"
+                                "-2.5 0 0 0 0 0 0 1\n"
+                                "7 0 0 0 0 0 0 1\n"
+                                "1.5e3 0 0 0 0 0 0 1\n"
+                                "0.00000000200 0 0 0 0 0 0 1\n"));
+  ASSERT_TRUE(t.isOk()) << t.status().message();
+  ASSERT_EQ(t->t_ns.size(), 5u);
+  EXPECT_EQ(t->t_ns[0], 1403636584763555765LL);
+  EXPECT_EQ(t->t_ns[1], -2500000000LL);
+  EXPECT_EQ(t->t_ns[2], 7000000000LL);
+  EXPECT_EQ(t->t_ns[3], 1500000000000LL);  // exponent form: through the double
+  EXPECT_EQ(t->t_ns[4], 2);                // eleven decimals: through the double, rounded
+}
+
 TEST_F(TrajectoryIo, ErrorsNameFileAndLine) {
   auto missing = readTrajectory((dir_ / "nope.txt").string());
   EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
