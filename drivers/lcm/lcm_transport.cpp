@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <regex>
 #include <utility>
 
 namespace svslam::drivers {
@@ -26,8 +27,8 @@ Status LcmParams::validate() const {
   if (url.find("://") == std::string::npos)
     return Status::invalidArgument("LCM URL '" + url +
                                    "' has no provider (use udpm://..., memq:// or file://...)");
-  for (const auto* ch : {&pose_channel, &stats_channel, &map_channel, &map_tile_channel, &correction_channel,
-                         &command_channel, &status_channel})
+  for (const auto* ch : {&pose_channel, &stats_channel, &map_channel, &map_tile_channel,
+                         &correction_channel, &command_channel, &status_channel})
     if (Status s = validateChannelName(*ch); !s) return s;
   if (command_channel == status_channel || command_channel == pose_channel)
     return Status::invalidArgument("LCM command channel must differ from the other channels");
@@ -112,8 +113,9 @@ void LcmLink::commandThunk(const _lcm_recv_buf_t* rbuf, const char*, void* self)
                                          rbuf->data_size);
 }
 
-void LcmLink::rawThunk(const _lcm_recv_buf_t* rbuf, const char*, void* sub) {
-  static_cast<RawSub*>(sub)->fn(static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size);
+void LcmLink::rawThunk(const _lcm_recv_buf_t* rbuf, const char* channel, void* sub) {
+  static_cast<RawSub*>(sub)->fn(std::string_view(channel != nullptr ? channel : ""),
+                                static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size);
 }
 
 void LcmLink::onCommand(const std::uint8_t* data, std::size_t size) {
@@ -211,6 +213,24 @@ Status LcmLink::pollCommands(int timeout_ms, std::vector<Command>& out) {
 Result<int> LcmLink::subscribeRaw(const std::string& channel, RawHandler handler) {
   if (Status s = validateChannelName(channel); !s) return s;
   if (!handler) return Status::invalidArgument("LcmLink::subscribeRaw: empty handler");
+  return subscribeEntry(channel,
+                        [fn = std::move(handler)](std::string_view, const std::uint8_t* data,
+                                                  std::size_t size) { fn(data, size); });
+}
+
+Result<int> LcmLink::subscribePattern(const std::string& pattern, ChannelHandler handler) {
+  if (pattern.empty()) return Status::invalidArgument("empty channel pattern");
+  try {
+    std::regex check(pattern);
+  } catch (const std::regex_error& e) {
+    return Status::invalidArgument("channel pattern '" + pattern +
+                                   "' is not a regular expression: " + e.what());
+  }
+  if (!handler) return Status::invalidArgument("LcmLink::subscribePattern: empty handler");
+  return subscribeEntry(pattern, std::move(handler));
+}
+
+Result<int> LcmLink::subscribeEntry(const std::string& channel, ChannelHandler handler) {
   std::lock_guard<std::mutex> lock(handle_mu_);
   auto entry = std::make_unique<RawSub>();
   entry->fn = std::move(handler);
