@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # `cmake --install` into a temporary prefix, then a process outside svslam built against the
 # installed files only (tests/install_consumer: find_package(svslam_lcm_types)) decodes a pose
-# the installed `svslam run` published into an LCM log.
+# the installed `svslam run` published into an LCM log, with the C++ and the C types.
 # Usage: install_consumer_test.sh BUILD_DIR SOURCE_DIR JAR_EXPECTED(0|1)
 set -euo pipefail
 build=$1 src=$2 want_jar=$3
@@ -17,10 +17,11 @@ if grep -v -e "-- Install configuration" -e "$prefix/" "$tmp/install.txt"; then
 fi
 
 expected=(bin/svslam lib/systemd/system/svslam.service share/svslam/svslam.yaml
-          lib/cmake/svslam_lcm_types/svslam_lcm_typesConfig.cmake lib/pkgconfig/svslam_lcm_types.pc)
+          lib/cmake/svslam_lcm_types/svslam_lcm_typesConfig.cmake lib/pkgconfig/svslam_lcm_types.pc
+          lib/libsvslam_lcm_c.a)
 for t in pose_t stats_t map_summary_t map_tile_t pose_correction_t command_t command_status_t \
          stereo_image_t; do
-  expected+=("include/svslam/lcm/svslam_lcm/$t.hpp")
+  expected+=("include/svslam/lcm/svslam_lcm/$t.hpp" "include/svslam/lcm/svslam_lcm_$t.h")
 done
 [ "$want_jar" = 1 ] && expected+=(share/java/svslam_lcm_types.jar)
 for f in "${expected[@]}"; do
@@ -49,4 +50,5 @@ cmake --build "$tmp/consumer" > "$tmp/build.txt" 2>&1 || { cat "$tmp/build.txt";
 cat "$tmp/pose.txt"
 grep -q "^pose seq 0 utime [0-9]* frame svslam_world position " "$tmp/pose.txt" ||
   fail "unexpected consumer output"
+grep -q "^C decoder agrees$" "$tmp/pose.txt" || fail "the C types were not checked"
 echo "OK"
