@@ -62,17 +62,16 @@ int runListen(const std::vector<std::string>& args) {
               "stereo_image (fields in docs/lcm.md). Messages of other types are skipped;\n"
               "malformed svslam messages are reported on stderr. Exits 0 after --count\n"
               "messages of --count-type (--count 0: at the end of a replayed file:// log),\n"
-              "1 when none arrives within --timeout-s or a replayed log ends before --count.");
+              "1 when nothing is printed for --timeout-s or a replayed log ends before --count.");
   p.addOption("url", "URL", "LCM URL", defaults.url);
   p.addOption("channel", "REGEX",
-              "channels to print: a channel name or a regular expression matching whole names",
-              ".*");
+              "channels to print: a name, or a regular expression matching whole names", ".*");
   p.addOption("types", "LIST", "comma-separated message types to print (all: every type)", "all");
   p.addFlag("no-stats", "do not print statistics");
   p.addFlag("no-map-tiles", "do not print map tiles");
   p.addOption("count", "N", "exit 0 after N messages of --count-type (0: never)", "0");
-  p.addOption("count-type", "TYPE", "the message type --count and --timeout-s count", "pose");
-  p.addOption("timeout-s", "S", "longest wait for the next message of --count-type, seconds", "10");
+  p.addOption("count-type", "TYPE", "the message type --count counts", "pose");
+  p.addOption("timeout-s", "S", "longest wait for the next message printed, seconds", "10");
   if (auto code = parseCommandLine(p, args)) return *code;
   auto fail = [](const Status& s) { return reportFailure("listen", s); };
 
@@ -119,10 +118,8 @@ int runListen(const std::vector<std::string>& args) {
     }
     std::printf("%s\n", line.json.c_str());
     std::fflush(stdout);
-    if (type == counted) {
-      ++received;
-      deadline = Clock::now() + gap;
-    }
+    deadline = Clock::now() + gap;
+    if (type == counted) ++received;
   };
   if (auto id = (*link)->subscribePattern(pattern, on_message); !id) return fail(id.status());
 
@@ -134,10 +131,10 @@ int runListen(const std::vector<std::string>& args) {
     if (left <= Clock::duration::zero()) {
       char secs[32];
       std::snprintf(secs, sizeof secs, "%g", *timeout_s);
-      return fail(Status::notFound("no " + counted_name + " on '" + pattern + "' via '" + lp.url +
-                                   "' within " + secs + " s (received " + std::to_string(received) +
-                                   (wanted ? " of " : "") + (wanted ? std::to_string(wanted) : "") +
-                                   ", " + std::to_string(malformed) + " malformed)"));
+      return fail(Status::notFound(
+          "nothing on '" + pattern + "' via '" + lp.url + "' for " + secs + " s (" +
+          std::to_string(received) + (wanted ? " of " + std::to_string(wanted) : "") + " " +
+          plural(counted_name) + " received, " + std::to_string(malformed) + " malformed)"));
     }
     const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(left).count();
     auto handled = (*link)->handle(static_cast<int>(std::clamp<long long>(ms, 0, 100)));

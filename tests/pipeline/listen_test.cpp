@@ -139,15 +139,14 @@ class ListenTest : public ::testing::Test {
 TEST_F(ListenTest, PrintsEveryTypeOnceWithItsChannel) {
   ASSERT_EQ(listen("--timeout-s 20"), 0) << err_;
   EXPECT_EQ(countOf(out_, "\n"), 8) << out_;
-  const char* expected[] = {
-      R"({"type": "pose", "channel": "SVSLAM_POSE")",
-      R"({"type": "stats", "channel": "SVSLAM_STATS")",
-      R"({"type": "map_summary", "channel": "SVSLAM_MAP")",
-      R"({"type": "map_tile", "channel": "SVSLAM_MAP_TILE")",
-      R"({"type": "pose_correction", "channel": "SVSLAM_POSE_CORRECTION")",
-      R"({"type": "command", "channel": "SVSLAM_COMMAND")",
-      R"({"type": "command_status", "channel": "SVSLAM_COMMAND_STATUS")",
-      R"({"type": "stereo_image", "channel": "CAM_FRONT")"};
+  const char* expected[] = {R"({"type": "pose", "channel": "SVSLAM_POSE")",
+                            R"({"type": "stats", "channel": "SVSLAM_STATS")",
+                            R"({"type": "map_summary", "channel": "SVSLAM_MAP")",
+                            R"({"type": "map_tile", "channel": "SVSLAM_MAP_TILE")",
+                            R"({"type": "pose_correction", "channel": "SVSLAM_POSE_CORRECTION")",
+                            R"({"type": "command", "channel": "SVSLAM_COMMAND")",
+                            R"({"type": "command_status", "channel": "SVSLAM_COMMAND_STATUS")",
+                            R"({"type": "stereo_image", "channel": "CAM_FRONT")"};
   for (const char* e : expected) EXPECT_EQ(countOf(out_, e), 1) << e << "\n" << out_;
   EXPECT_NE(out_.find(R"("position": [1, 2, 3])"), std::string::npos) << out_;
   EXPECT_NE(out_.find(R"("landmarks_in_map": 7, "num_points": 2)"), std::string::npos) << out_;
@@ -189,6 +188,15 @@ TEST_F(ListenTest, BadOptionsExitOneNamingTheProblem) {
   EXPECT_NE(err_.find("--count-type names one message type"), std::string::npos) << err_;
   EXPECT_EQ(listen("--channel 'SVSLAM_(POSE'"), 1);
   EXPECT_NE(err_.find("is not a regular expression"), std::string::npos) << err_;
+
+  // Nothing on the bus: exit 1 after --timeout-s, naming the channels and the URL.
+  EXPECT_EQ(test::runSvslam("listen --url memq:// --channel 'SVSLAM_.*' --timeout-s 0.3 --count 2",
+                            dir_ / "out.txt", dir_ / "err.txt"),
+            1);
+  EXPECT_NE(test::slurp(dir_ / "err.txt")
+                .find("nothing on 'SVSLAM_.*' via 'memq://' for 0.3 s (0 of 2 poses received"),
+            std::string::npos)
+      << test::slurp(dir_ / "err.txt");
 }
 
 TEST(ListenLines, UnknownAndMalformedMessages) {
