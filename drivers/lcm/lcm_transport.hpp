@@ -102,8 +102,8 @@ class LcmLink {
   Result<int> subscribeRaw(const std::string& channel, RawHandler handler);
   // Subscribes `handler` to every channel whose whole name matches the regular expression
   // `pattern` (LCM's own matching: GLib/PCRE syntax, anchored at both ends; ".*" = all).
-  // Error on an empty pattern or one that is not a valid ECMAScript regular expression
-  // either. Must not be called from inside a handler.
+  // Error on an empty pattern or one GLib cannot compile. Must not be called from inside a
+  // handler.
   Result<int> subscribePattern(const std::string& pattern, ChannelHandler handler);
   Status unsubscribe(int id);
   // Waits up to timeout_ms (>= 0) for one message and dispatches it to its handlers: true
