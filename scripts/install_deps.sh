@@ -18,6 +18,9 @@ packages=(build-essential cmake pkg-config git
           # for the multicast test in a private network namespace
           libreaderwriterqueue-dev liblcm-dev liblcm-bin libglib2.0-dev libsystemd-dev
           libcamera-dev v4l-utils iproute2 util-linux systemd
+          # LCM types for Java (svslam_lcm_types.jar, lcm-spy; optional: without a JDK or lcm.jar
+          # the jar is not built and its test skips): JDK, LCM's Java library, lcm-spy's charts
+          default-jdk-headless liblcm-java libjchart2d-java
           # cross step of .ci/run (scripts/cross_test_arm.sh): ARM cross compilers, qemu-user
           # and GoogleTest's sources to build for the target
           g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user-static googletest)

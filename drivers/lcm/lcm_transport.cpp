@@ -1,6 +1,7 @@
 // LcmLink over the LCM C API (lcm_transport.hpp).
 #include "drivers/lcm/lcm_transport.hpp"
 
+#include <glib.h>
 #include <lcm/lcm.h>
 
 #include <algorithm>
@@ -26,8 +27,8 @@ Status LcmParams::validate() const {
   if (url.find("://") == std::string::npos)
     return Status::invalidArgument("LCM URL '" + url +
                                    "' has no provider (use udpm://..., memq:// or file://...)");
-  for (const auto* ch : {&pose_channel, &stats_channel, &map_channel, &map_tile_channel, &correction_channel,
-                         &command_channel, &status_channel})
+  for (const auto* ch : {&pose_channel, &stats_channel, &map_channel, &map_tile_channel,
+                         &correction_channel, &command_channel, &status_channel})
     if (Status s = validateChannelName(*ch); !s) return s;
   if (command_channel == status_channel || command_channel == pose_channel)
     return Status::invalidArgument("LCM command channel must differ from the other channels");
@@ -112,8 +113,9 @@ void LcmLink::commandThunk(const _lcm_recv_buf_t* rbuf, const char*, void* self)
                                          rbuf->data_size);
 }
 
-void LcmLink::rawThunk(const _lcm_recv_buf_t* rbuf, const char*, void* sub) {
-  static_cast<RawSub*>(sub)->fn(static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size);
+void LcmLink::rawThunk(const _lcm_recv_buf_t* rbuf, const char* channel, void* sub) {
+  static_cast<RawSub*>(sub)->fn(std::string_view(channel != nullptr ? channel : ""),
+                                static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size);
 }
 
 void LcmLink::onCommand(const std::uint8_t* data, std::size_t size) {
@@ -211,6 +213,30 @@ Status LcmLink::pollCommands(int timeout_ms, std::vector<Command>& out) {
 Result<int> LcmLink::subscribeRaw(const std::string& channel, RawHandler handler) {
   if (Status s = validateChannelName(channel); !s) return s;
   if (!handler) return Status::invalidArgument("LcmLink::subscribeRaw: empty handler");
+  return subscribeEntry(channel,
+                        [fn = std::move(handler)](std::string_view, const std::uint8_t* data,
+                                                  std::size_t size) { fn(data, size); });
+}
+
+Result<int> LcmLink::subscribePattern(const std::string& pattern, ChannelHandler handler) {
+  if (pattern.empty()) return Status::invalidArgument("empty channel pattern");
+  // LCM matches with GLib's regular expressions: check the pattern with the same engine (std::regex
+  // also trips a GCC 12 -Wmaybe-uninitialized false positive in the sanitizer build).
+  GError* error = nullptr;
+  GRegex* re = g_regex_new(pattern.c_str(), static_cast<GRegexCompileFlags>(0),
+                           static_cast<GRegexMatchFlags>(0), &error);
+  if (re == nullptr) {
+    const std::string why = error != nullptr ? error->message : "invalid";
+    if (error != nullptr) g_error_free(error);
+    return Status::invalidArgument("channel pattern '" + pattern +
+                                   "' is not a regular expression: " + why);
+  }
+  g_regex_unref(re);
+  if (!handler) return Status::invalidArgument("LcmLink::subscribePattern: empty handler");
+  return subscribeEntry(pattern, std::move(handler));
+}
+
+Result<int> LcmLink::subscribeEntry(const std::string& channel, ChannelHandler handler) {
   std::lock_guard<std::mutex> lock(handle_mu_);
   auto entry = std::make_unique<RawSub>();
   entry->fn = std::move(handler);

@@ -22,6 +22,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/status.hpp"
@@ -63,6 +64,9 @@ class LcmLink {
   static constexpr std::size_t kMaxPendingCommands = 256;
   // Handler of a raw subscription: the encoded message bytes.
   using RawHandler = std::function<void(const std::uint8_t* data, std::size_t size)>;
+  // Handler of a pattern subscription: the channel the message came on and its bytes.
+  using ChannelHandler =
+      std::function<void(std::string_view channel, const std::uint8_t* data, std::size_t size)>;
 
   // Creates the LCM instance and subscribes to the command channel; `gate` decides which
   // commands are accepted (default: none). Error naming the URL when LCM cannot be created
@@ -96,6 +100,11 @@ class LcmLink {
   // Subscribes `handler` to `channel` (validateChannelName); returns a subscription id.
   // Must not be called from inside a handler.
   Result<int> subscribeRaw(const std::string& channel, RawHandler handler);
+  // Subscribes `handler` to every channel whose whole name matches the regular expression
+  // `pattern` (LCM's own matching: GLib/PCRE syntax, anchored at both ends; ".*" = all).
+  // Error on an empty pattern or one GLib cannot compile. Must not be called from inside a
+  // handler.
+  Result<int> subscribePattern(const std::string& pattern, ChannelHandler handler);
   Status unsubscribe(int id);
   // Waits up to timeout_ms (>= 0) for one message and dispatches it to its handlers: true
   // when a message was handled, false on timeout. Error when LCM fails, or at the end of a
@@ -114,13 +123,15 @@ class LcmLink {
 
  private:
   struct RawSub {
-    RawHandler fn;
+    ChannelHandler fn;
     _lcm_subscription_t* sub = nullptr;
   };
   LcmLink(LcmParams params, _lcm_t* lcm, CommandGate gate);
   template <class Msg>
   Status publishMsg(const std::string& channel, const Result<Msg>& msg);
   Result<bool> handleLocked(int timeout_ms);  // precondition: handle_mu_ held
+  Result<int> subscribeEntry(const std::string& channel,
+                             ChannelHandler handler);  // takes handle_mu_
   void onCommand(const std::uint8_t* data, std::size_t size);
   bool takePending(std::vector<Command>& out);
   static void commandThunk(const _lcm_recv_buf_t* rbuf, const char* channel, void* self);

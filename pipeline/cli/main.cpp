@@ -26,7 +26,8 @@ constexpr const char* kUsage =
     "  train-vocabulary ORB bag-of-words vocabulary (loop closing) from a set of images\n"
     "  plot             pictures of a run (PNG + SVG): trajectory, altitude, landmarks, latency\n"
 #ifdef SVSLAM_HAVE_LISTEN
-    "  listen           print the poses (with covariance) and stats published on LCM\n"
+    "  listen           print every svslam message on LCM (poses, stats, map, corrections,\n"
+    "                   commands, images) as JSON lines\n"
 #endif
     "\n"
     "Run 'svslam <command> --help' for the options of a command.\n";
