@@ -24,6 +24,7 @@ constexpr const char* kUsage =
     "  eval-trajectory  drift, ATE and RPE of a trajectory against ground truth (KITTI/TUM/EuRoC)\n"
     "  eval-dem         accuracy and coverage of an elevation map (GeoTIFF) against ground truth\n"
     "  train-vocabulary ORB bag-of-words vocabulary (loop closing) from a set of images\n"
+    "  calibrate        stereo chessboard calibration (image pairs or live cameras) -> calib file\n"
 #ifdef SVSLAM_HAVE_LISTEN
     "  listen           print the poses (with covariance) and stats published on LCM\n"
 #endif
@@ -44,6 +45,7 @@ int dispatch(const std::string& cmd, const std::vector<std::string>& args) {
   if (cmd == "eval-trajectory") return svslam::cli::runEvalTrajectory(args);
   if (cmd == "eval-dem") return svslam::cli::runEvalDem(args);
   if (cmd == "train-vocabulary") return svslam::cli::runTrainVocabulary(args);
+  if (cmd == "calibrate") return svslam::cli::runCalibrate(args);
 #ifdef SVSLAM_HAVE_LISTEN
   if (cmd == "listen") return svslam::cli::runListen(args);
 #endif
