@@ -30,7 +30,7 @@
 // camera; default 0.75 = at least 7 of 9 cells) calibrate() fails with "poor coverage": the
 // distortion towards the uncovered edges and image corners would be extrapolated.
 //
-// Epipolar error: every detected corner of every accepted pair is undistorted and rectified
+// Epipolar error: every detected corner of every used pair is undistorted and rectified
 // (undistortPoints with R1,P1 / R2,P2); the error of a corner is |y_left - y_right| in rectified
 // px. Mean and max are reported.
 #include <opencv2/core.hpp>
