@@ -29,7 +29,7 @@ void addScene(const ChessboardScene& s, int n, StereoCalibrator& cal) {
     cv::Mat l, r;
     ASSERT_TRUE(s.render(i, 0, l) && s.render(i, 1, r)) << "pose " << i << " leaves the view";
     bool accepted = false;
-    ASSERT_TRUE(cal.addPair(l, r, "pose" + std::to_string(i), accepted).isOk());
+    ASSERT_TRUE(cal.addPair(l, r, std::string("pose").append(std::to_string(i)), accepted).isOk());
     EXPECT_TRUE(accepted) << "pose " << i;
   }
 }
@@ -137,7 +137,7 @@ TEST(StereoCalibrator, PoorCoverageIsAnError) {
     cv::warpAffine(l, lt, M, l.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     cv::warpAffine(r, rt, M, r.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     bool accepted = false;
-    ASSERT_TRUE(cal.addPair(lt, rt, "p" + std::to_string(i), accepted).isOk());
+    ASSERT_TRUE(cal.addPair(lt, rt, std::string("p").append(std::to_string(i)), accepted).isOk());
   }
   auto res = cal.calibrate();
   ASSERT_FALSE(res.isOk());
