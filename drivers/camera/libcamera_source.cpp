@@ -174,11 +174,15 @@ class LibcameraStereoSource final : public StereoSource {
   }
   const StereoCalibration& calibration() const override { return rect_.calib; }
   int size() const override { return -1; }
+  // The next pair as captured (no rectification).
+  Result<bool> nextRaw(ImageU8& left, ImageU8& right, TimeNs& t_ns) {
+    return pairer_.next(
+        [this](int c, ImageU8& img, TimeNs& t) { return cams_[c]->grab(img, t, timeout_ms_); },
+        left, right, t_ns);
+  }
   Result<bool> next(StereoFrame& out) override {
     TimeNs t_ns = 0;
-    auto r = pairer_.next(
-        [this](int c, ImageU8& img, TimeNs& t) { return cams_[c]->grab(img, t, timeout_ms_); },
-        raw_left_, raw_right_, t_ns);
+    auto r = nextRaw(raw_left_, raw_right_, t_ns);
     if (!r || !*r) return r;
     if (Status s = rect_.apply(raw_left_, raw_right_, out); !s) return s;
     out.index = index_++;
@@ -196,9 +200,20 @@ class LibcameraStereoSource final : public StereoSource {
   int index_ = 0;
 };
 
-}  // namespace
+class LibcameraRawCapture final : public RawStereoCapture {
+ public:
+  explicit LibcameraRawCapture(std::unique_ptr<LibcameraStereoSource> src) : src_(std::move(src)) {}
+  Result<bool> next(ImageU8& left, ImageU8& right, TimeNs& t_ns) override {
+    return src_->nextRaw(left, right, t_ns);
+  }
 
-Result<std::unique_ptr<StereoSource>> openLibcameraSource(const std::string& spec_after_prefix) {
+ private:
+  std::unique_ptr<LibcameraStereoSource> src_;
+};
+
+// raw: no calibration file needed (the rectification stays empty and only nextRaw is used).
+Result<std::unique_ptr<LibcameraStereoSource>> openLibcamera(const std::string& spec_after_prefix,
+                                                             bool raw) {
   auto spec = parseCameraSpec(spec_after_prefix, "libcamera",
                               {"width", "height", "calib", "sync_ms", "timeout_ms"});
   if (!spec) return spec.status();
@@ -239,24 +254,45 @@ Result<std::unique_ptr<StereoSource>> openLibcameraSource(const std::string& spe
     return Status::notFound("libcamera: camera '" + spec->devices[static_cast<std::size_t>(i)] +
                             "' not found (" + list + ")");
   }
+  StereoRectification rect;
   auto calib = spec->options.find("calib");
-  if (calib == spec->options.end()) {
+  if (raw) {
+    // no rectification: the views are delivered as captured
+  } else if (calib == spec->options.end()) {
     cams[0].reset();
     cams[1].reset();
     manager->stop();
     return Status::invalidArgument("libcamera: calib=FILE is required (see docs/cameras.md)");
-  }
-  auto rect = loadStereoRectification(calib->second, width, height);
-  if (!rect) {
-    cams[0].reset();
-    cams[1].reset();
-    manager->stop();
-    return rect.status();
+  } else {
+    auto loaded = loadStereoRectification(calib->second, width, height);
+    if (!loaded) {
+      cams[0].reset();
+      cams[1].reset();
+      manager->stop();
+      return loaded.status();
+    }
+    rect = std::move(loaded).value();
   }
   auto source = std::make_unique<LibcameraStereoSource>(
       std::move(manager), static_cast<TimeNs>(sync_ms * static_cast<double>(kNsPerMs)), timeout_ms);
-  if (Status s = source->init(cams, width, height, std::move(rect).value()); !s) return s;
-  return std::unique_ptr<StereoSource>(std::move(source));
+  if (Status s = source->init(cams, width, height, std::move(rect)); !s) return s;
+  return source;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<StereoSource>> openLibcameraSource(const std::string& spec_after_prefix) {
+  auto src = openLibcamera(spec_after_prefix, false);
+  if (!src) return src.status();
+  return std::unique_ptr<StereoSource>(std::move(src).value());
+}
+
+Result<std::unique_ptr<RawStereoCapture>> openLibcameraRawCapture(
+    const std::string& spec_after_prefix) {
+  auto src = openLibcamera(spec_after_prefix, true);
+  if (!src) return src.status();
+  return std::unique_ptr<RawStereoCapture>(
+      std::make_unique<LibcameraRawCapture>(std::move(src).value()));
 }
 
 }  // namespace svslam::drivers

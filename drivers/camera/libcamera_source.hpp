@@ -17,11 +17,15 @@
 #include <memory>
 #include <string>
 
+#include "drivers/camera/raw_stereo_capture.hpp"
 #include "drivers/source/stereo_source.hpp"
 
 namespace svslam::drivers {
 
 // `spec_after_prefix` = the spec without "libcamera:".
 Result<std::unique_ptr<StereoSource>> openLibcameraSource(const std::string& spec_after_prefix);
+// The same cameras unrectified (calib= not needed, ignored), for calibrating them.
+Result<std::unique_ptr<RawStereoCapture>> openLibcameraRawCapture(
+    const std::string& spec_after_prefix);
 
 }  // namespace svslam::drivers

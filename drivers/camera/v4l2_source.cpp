@@ -9,6 +9,7 @@
 
 #include "drivers/files/opencv_view.hpp"
 #include "drivers/camera/pixel_formats.hpp"
+#include "drivers/files/stereo_calibration_file.hpp"
 
 namespace svslam::drivers {
 namespace {
@@ -43,25 +44,6 @@ Result<int> integer(const CameraSpec& spec, const std::string& key, int fallback
   if (*v != std::floor(*v) || std::abs(*v) > 1e9)
     return Status::invalidArgument(scheme + ": option " + key + " must be an integer");
   return static_cast<int>(*v);
-}
-
-Result<cv::Mat> readMatrix(const cv::FileStorage& fs, const std::string& key,
-                           const std::string& file, int rows, int cols) {
-  cv::Mat m;
-  const cv::FileNode node = fs[key];
-  if (node.empty()) return Status::corruptData(file + ": missing calibration key '" + key + "'");
-  node >> m;
-  if (m.empty() && !(key[0] == 'D'))
-    return Status::corruptData(file + ": key '" + key + "' is not a matrix");
-  if (!m.empty()) m.convertTo(m, CV_64F);
-  if (rows > 0 && (m.rows * m.cols != rows * cols))
-    return Status::corruptData(file + ": key '" + key + "' must have " +
-                               std::to_string(rows * cols) + " elements, has " +
-                               std::to_string(m.rows * m.cols));
-  if (rows > 0) m = m.reshape(1, rows);
-  if (!m.empty() && !cv::checkRange(m))
-    return Status::corruptData(file + ": key '" + key + "' contains NaN or infinity");
-  return m;
 }
 
 }  // namespace
@@ -106,44 +88,21 @@ Status StereoRectification::apply(const ImageU8& raw_left, const ImageU8& raw_ri
 
 Result<StereoRectification> loadStereoRectification(const std::string& file, int width,
                                                     int height) {
+  auto c = readStereoCalibrationFile(file);
+  if (!c) return c.status();
+  if (c->width != width || c->height != height)
+    return Status::invalidArgument(file + ": calibrated for " + std::to_string(c->width) + "x" +
+                                   std::to_string(c->height) + " but the capture is " +
+                                   std::to_string(width) + "x" + std::to_string(height));
   try {
-    cv::FileStorage fs(file, cv::FileStorage::READ);
-    if (!fs.isOpened()) return Status::notFound("cannot open calibration file " + file);
-    cv::Mat K[2], D[2];
-    for (int i = 0; i < 2; ++i) {
-      const std::string n = std::to_string(i + 1);
-      auto k = readMatrix(fs, "K" + n, file, 3, 3);
-      if (!k) return k.status();
-      auto d = readMatrix(fs, "D" + n, file, 0, 0);
-      if (!d) return d.status();
-      K[i] = *k;
-      D[i] = d->empty() ? cv::Mat::zeros(1, 5, CV_64F) : d->reshape(1, 1);
-      if (!(K[i].at<double>(0, 0) > 0 && K[i].at<double>(1, 1) > 0))
-        return Status::corruptData(file + ": key 'K" + n + "' has focal lengths <= 0");
-    }
-    auto R = readMatrix(fs, "R", file, 3, 3);
-    if (!R) return R.status();
-    auto T = readMatrix(fs, "T", file, 3, 1);
-    if (!T) return T.status();
-    int size[2] = {0, 0};
-    const char* size_keys[2] = {"image_width", "image_height"};
-    for (int i = 0; i < 2; ++i) {
-      const cv::FileNode node = fs[size_keys[i]];
-      if (node.empty() || !node.isInt())
-        return Status::corruptData(file + ": missing calibration key '" + size_keys[i] + "'");
-      size[i] = static_cast<int>(node);
-    }
-    if (size[0] != width || size[1] != height)
-      return Status::invalidArgument(file + ": calibrated for " + std::to_string(size[0]) + "x" +
-                                     std::to_string(size[1]) + " but the capture is " +
-                                     std::to_string(width) + "x" + std::to_string(height));
     const cv::Size sz(width, height);
     cv::Mat R1, R2, P1, P2, Q;
-    cv::stereoRectify(K[0], D[0], K[1], D[1], sz, *R, *T, R1, R2, P1, P2, Q,
+    cv::stereoRectify(c->K1, c->D1, c->K2, c->D2, sz, c->R, c->T, R1, R2, P1, P2, Q,
                       cv::CALIB_ZERO_DISPARITY, 0.0);
     StereoRectification rect;
-    cv::initUndistortRectifyMap(K[0], D[0], R1, P1, sz, CV_16SC2, rect.map_left_x, rect.map_left_y);
-    cv::initUndistortRectifyMap(K[1], D[1], R2, P2, sz, CV_16SC2, rect.map_right_x,
+    cv::initUndistortRectifyMap(c->K1, c->D1, R1, P1, sz, CV_16SC2, rect.map_left_x,
+                                rect.map_left_y);
+    cv::initUndistortRectifyMap(c->K2, c->D2, R2, P2, sz, CV_16SC2, rect.map_right_x,
                                 rect.map_right_y);
     rect.calib.f_px = P1.at<double>(0, 0);
     rect.calib.cx_px = P1.at<double>(0, 2);
@@ -213,8 +172,7 @@ Result<bool> V4l2StereoSource::next(StereoFrame& out) {
   return true;
 }
 
-Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix,
-                                                     V4l2Device& device) {
+Result<V4l2Setup> parseV4l2Setup(const std::string& spec_after_prefix) {
   auto spec = parseCameraSpec(
       spec_after_prefix, "v4l2",
       {"width", "height", "fps", "format", "calib", "sync_ms", "layout", "buffers", "timeout_ms"});
@@ -245,9 +203,6 @@ Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_aft
         ", got " + std::to_string(spec->devices.size()));
   if (!(*sync_ms >= 0.0 && *sync_ms <= 1000.0))
     return Status::invalidArgument("v4l2: sync_ms must be in [0, 1000]");
-  if (!opt.count("calib"))
-    return Status::invalidArgument(
-        "v4l2: calib=FILE is required (stereo calibration, see docs/cameras.md)");
   p.width = *width;
   p.height = *height;
   p.fps = *fps;
@@ -260,17 +215,41 @@ Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_aft
     p.device = d;
     if (Status s = p.validate(); !s) return s;
   }
-  auto rect = loadStereoRectification(opt.at("calib"), sbs ? p.width / 2 : p.width, p.height);
-  if (!rect) return rect.status();
+  V4l2Setup setup;
+  setup.params = p;
+  setup.devices = spec->devices;
+  setup.side_by_side = sbs;
+  setup.sync_tolerance_ns =
+      static_cast<TimeNs>(std::llround(*sync_ms * static_cast<double>(kNsPerMs)));
+  if (opt.count("calib")) setup.calib = opt.at("calib");
+  return setup;
+}
+
+Result<std::vector<std::unique_ptr<V4l2Capture>>> openV4l2Captures(const V4l2Setup& setup,
+                                                                   V4l2Device& device) {
   std::vector<std::unique_ptr<V4l2Capture>> caps;
-  for (const std::string& d : spec->devices) {
+  V4l2CaptureParams p = setup.params;
+  for (const std::string& d : setup.devices) {
     p.device = d;
     caps.push_back(std::make_unique<V4l2Capture>(device, p));
     if (Status s = caps.back()->open(); !s) return s;
   }
+  return caps;
+}
+
+Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix,
+                                                     V4l2Device& device) {
+  auto setup = parseV4l2Setup(spec_after_prefix);
+  if (!setup) return setup.status();
+  if (setup->calib.empty())
+    return Status::invalidArgument(
+        "v4l2: calib=FILE is required (stereo calibration, see docs/cameras.md)");
+  auto rect = loadStereoRectification(setup->calib, setup->viewWidth(), setup->params.height);
+  if (!rect) return rect.status();
+  auto caps = openV4l2Captures(*setup, device);
+  if (!caps) return caps.status();
   return std::unique_ptr<StereoSource>(std::make_unique<V4l2StereoSource>(
-      std::move(caps), std::move(rect).value(),
-      static_cast<TimeNs>(std::llround(*sync_ms * static_cast<double>(kNsPerMs)))));
+      std::move(caps).value(), std::move(rect).value(), setup->sync_tolerance_ns));
 }
 
 Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix) {

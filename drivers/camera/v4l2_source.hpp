@@ -92,6 +92,20 @@ class V4l2StereoSource final : public StereoSource {
   int index_ = 0;
 };
 
+// The v4l2: spec checked and split (everything but the calibration file, which is only named).
+struct V4l2Setup {
+  V4l2CaptureParams params;          // device left empty; width = full frame width
+  std::vector<std::string> devices;  // one (side-by-side) or two (left, right)
+  bool side_by_side = false;
+  TimeNs sync_tolerance_ns = 0;
+  std::string calib;  // calib=FILE, "" when absent
+  int viewWidth() const { return side_by_side ? params.width / 2 : params.width; }
+};
+Result<V4l2Setup> parseV4l2Setup(const std::string& spec_after_prefix);
+// Opens and starts one capture per device of `setup` (raw frames, no rectification).
+Result<std::vector<std::unique_ptr<V4l2Capture>>> openV4l2Captures(const V4l2Setup& setup,
+                                                                   V4l2Device& device);
+
 // `spec_after_prefix` = the spec without "v4l2:". Opens and starts the camera(s).
 Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix,
                                                      V4l2Device& device);

@@ -15,6 +15,7 @@ int runPipeline(const std::vector<std::string>& args);
 int runConfig(const std::vector<std::string>& args);  // prints the documented defaults (YAML)
 int runTrainVocabulary(const std::vector<std::string>& args);  // tools/train_vocabulary_command.cpp
 int runPlot(const std::vector<std::string>& args);  // tools/plot_command.cpp (PNG + SVG)
+int runCalibrate(const std::vector<std::string>& args);        // tools/calibrate_command.cpp
 int runListen(const std::vector<std::string>& args);           // cli/listen_command.cpp (LCM)
 
 }  // namespace svslam::cli

@@ -25,6 +25,7 @@ constexpr const char* kUsage =
     "  eval-dem         accuracy and coverage of an elevation map (GeoTIFF) against ground truth\n"
     "  train-vocabulary ORB bag-of-words vocabulary (loop closing) from a set of images\n"
     "  plot             pictures of a run (PNG + SVG): trajectory, altitude, landmarks, latency\n"
+    "  calibrate        stereo chessboard calibration (image pairs or live cameras) -> calib file\n"
 #ifdef SVSLAM_HAVE_LISTEN
     "  listen           print every svslam message on LCM (poses, stats, map, corrections,\n"
     "                   commands, images) as JSON lines\n"
@@ -47,6 +48,7 @@ int dispatch(const std::string& cmd, const std::vector<std::string>& args) {
   if (cmd == "eval-dem") return svslam::cli::runEvalDem(args);
   if (cmd == "train-vocabulary") return svslam::cli::runTrainVocabulary(args);
   if (cmd == "plot") return svslam::cli::runPlot(args);
+  if (cmd == "calibrate") return svslam::cli::runCalibrate(args);
 #ifdef SVSLAM_HAVE_LISTEN
   if (cmd == "listen") return svslam::cli::runListen(args);
 #endif

@@ -71,7 +71,10 @@ int FakeV4l2Device::close(int fd) {
 
 void FakeV4l2Device::fill(Camera& cam, std::uint32_t index, std::uint32_t sequence,
                           std::uint32_t& bytes_used) {
-  const ImageU8 frame = expectedFrame(cam.config.base, sequence);
+  const ImageU8& base = cam.config.bases.empty()
+                            ? cam.config.base
+                            : cam.config.bases[sequence % cam.config.bases.size()];
+  const ImageU8 frame = expectedFrame(base, sequence);
   std::vector<std::uint8_t>& buf = cam.buffers[index];
   const int w = static_cast<int>(cam.width), h = static_cast<int>(cam.height);
   std::fill(buf.begin(), buf.end(), std::uint8_t{0xEE});  // padding shows up if misread

@@ -42,6 +42,7 @@ struct FakeEvent {
 
 struct FakeCameraConfig {
   ImageU8 base;                     // the scene (full frame for side-by-side)
+  std::vector<ImageU8> bases;       // when not empty: frame `seq` shows bases[seq % size]
   std::uint32_t granted_width = 0;  // S_FMT answers with this width (0 = as asked)
   std::uint32_t granted_height = 0;
   std::uint32_t granted_fourcc = 0;  // 0 = as asked
