@@ -7,10 +7,12 @@
 
 #include <filesystem>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "../../core/test_files.hpp"
 #include "../calib/chessboard_scene.hpp"
 #include "../camera/fake_v4l2_device.hpp"
+#include "drivers/calib/calibration_pairs.hpp"
 #include "drivers/calib/stereo_calibrator.hpp"
 #include "drivers/camera/v4l2_source.hpp"
 
@@ -117,6 +119,83 @@ TEST(StereoCalibrationFile, CalibratedSceneIsAcceptedByTheV4l2SourceAndRectifies
   for (std::size_t i = 0; i < cl.size(); ++i)
     worst = std::max(worst, static_cast<double>(std::abs(cl[i].y - cr[i].y)));
   EXPECT_LT(worst, 0.5);
+}
+
+// The real pairs (shared/data/chessboard_calib): calibrated, the file written, then the same 13
+// pairs played by the fake V4L2 cameras through the v4l2: source with that file: the board
+// corners found again in the rectified frames lie on the same rows.
+TEST(StereoCalibrationFile, RealPairsCalibratedThenRectifiedByTheV4l2Source) {
+  const std::string data = std::string(SVSLAM_DATA_DIR) + "/chessboard_calib";
+  if (!fs::exists(data)) GTEST_SKIP() << "no calibration data at " << data;
+  auto pairs = listCalibrationPairs(data);
+  ASSERT_TRUE(pairs.isOk()) << pairs.status().message();
+  StereoCalibrator cal(StereoCalibrationParams{});  // 9x6, 25 mm
+  std::vector<cv::Mat> left, right;
+  for (const auto& p : *pairs) {
+    left.push_back(cv::imread(p.left, cv::IMREAD_GRAYSCALE));
+    right.push_back(cv::imread(p.right, cv::IMREAD_GRAYSCALE));
+    bool accepted = false;
+    ASSERT_TRUE(cal.addPair(left.back(), right.back(), p.name, accepted).isOk());
+  }
+  auto res = cal.calibrate();
+  ASSERT_TRUE(res.isOk()) << res.status().message();
+  const fs::path dir = test::freshTestDir("svslam_calib_file_");
+  const std::string file = (dir / "stereo.yaml").string();
+  ASSERT_TRUE(writeStereoCalibrationFile(file, res->file).isOk());
+
+  // Frame k shows pair k: the fake driver adds the sequence number to every pixel (mod 256),
+  // so each base holds the image minus k (mod 256) and the frame is the image exactly.
+  const int n = static_cast<int>(left.size());
+  testing::FakeV4l2Device dev;
+  for (int cam = 0; cam < 2; ++cam) {
+    testing::FakeCameraConfig c;
+    for (int k = 0; k < n; ++k) {
+      const cv::Mat& img = cam == 0 ? left[static_cast<std::size_t>(k)]
+                                    : right[static_cast<std::size_t>(k)];
+      ImageU8 b(img.cols, img.rows);
+      for (int y = 0; y < img.rows; ++y)
+        for (int x = 0; x < img.cols; ++x)
+          b(x, y) = static_cast<std::uint8_t>(img.at<std::uint8_t>(y, x) - k);
+      c.bases.push_back(std::move(b));
+      c.script.push_back(testing::FakeEvent::frame(1'000'000 + k * 100'000'000LL,
+                                                   static_cast<std::uint32_t>(k)));
+    }
+    dev.addCamera(cam == 0 ? "/dev/video0" : "/dev/video1", std::move(c));
+  }
+  auto src = openV4l2Source("/dev/video0,/dev/video1?width=640&height=480&calib=" + file, dev);
+  ASSERT_TRUE(src.isOk()) << src.status().message();
+  double sum = 0.0, worst = 0.0;
+  int corners = 0, frames = 0;
+  for (int k = 0; k < n; ++k) {
+    StereoFrame frame;
+    auto more = (*src)->next(frame);
+    ASSERT_TRUE(more.isOk() && *more) << "frame " << k << ": " << more.status().message();
+    ++frames;
+    const cv::Mat l(frame.left.height(), frame.left.width(), CV_8U, frame.left.row(0),
+                    static_cast<std::size_t>(frame.left.stride()));
+    const cv::Mat r(frame.right.height(), frame.right.width(), CV_8U, frame.right.row(0),
+                    static_cast<std::size_t>(frame.right.stride()));
+    std::vector<cv::Point2f> cl, cr;
+    if (!cv::findChessboardCorners(l, cv::Size(9, 6), cl) ||
+        !cv::findChessboardCorners(r, cv::Size(9, 6), cr))
+      continue;  // a board cut by the rectified image border
+    const cv::TermCriteria stop(cv::TermCriteria::EPS | cv::TermCriteria::COUNT, 50, 1e-3);
+    cv::cornerSubPix(l, cl, cv::Size(5, 5), cv::Size(-1, -1), stop);
+    cv::cornerSubPix(r, cr, cv::Size(5, 5), cv::Size(-1, -1), stop);
+    for (std::size_t i = 0; i < cl.size(); ++i) {
+      const double dy = std::abs(static_cast<double>(cl[i].y - cr[i].y));
+      sum += dy;
+      worst = std::max(worst, dy);
+      ++corners;
+    }
+  }
+  EXPECT_EQ(frames, n);
+  ASSERT_GE(corners, 10 * 54) << "boards found again in fewer than 10 rectified pairs";
+  const double mean = sum / corners;
+  std::printf("rectified by the v4l2: source: %d corners, |dy| mean %.3f px, max %.3f px\n",
+              corners, mean, worst);
+  EXPECT_LE(mean, 0.3);
+  EXPECT_LE(worst, 1.5);
 }
 
 }  // namespace
