@@ -8,6 +8,8 @@ packages=(build-essential cmake pkg-config git
           libyaml-cpp-dev
           # LLVM linker: used when present, links the test executables several times faster
           lld
+          # build cache: the build scripts compile through it when present (scripts/ccache_env.sh)
+          ccache
           # elevation map files: GeoTIFF writer/reader (drivers/files/dem_files.cpp)
           libgdal-dev
           # loop closing back end: pose-graph optimisation (src/loop/pose_graph.cpp, Ceres >= 2.1;
