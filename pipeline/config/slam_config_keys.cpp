@@ -51,6 +51,9 @@ ConfigSection slamConfigSection() {
            "Gauss-Newton sub-pixel position of a tracked landmark (else the ZNCC parabola)"),
       number("patch_half_px", SVSLAM_FIELD(slam.patch_half_px), 1, 15, "px",
              "appearance patch (2h+1)^2 kept per landmark"),
+      number("map_voxel_m", SVSLAM_FIELD(slam.map_voxel_m), 1e-4, 1e6, "m",
+             "a landmark retired from the state stays in the map at most one per voxel of this "
+             "side (the best localised): the map grows with the volume seen, not the flight time"),
       number("retire_unseen_frames", SVSLAM_FIELD(slam.retire_unseen_frames), 1, 100000, "",
              "a landmark unseen for fewer frames is never retired"),
       number("lost_rot_sigma_rad", SVSLAM_FIELD(slam.lost_rot_sigma_rad), 1e-6, 10, "rad",

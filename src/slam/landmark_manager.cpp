@@ -5,9 +5,11 @@
 
 namespace svslam {
 
-LandmarkManager::LandmarkManager(int patch_half_px, int reserve_landmarks)
-    : h_(patch_half_px), big_(2 * patch_half_px) {
+LandmarkManager::LandmarkManager(int patch_half_px, int reserve_landmarks, double voxel_m)
+    : h_(patch_half_px), big_(2 * patch_half_px), retired_(voxel_m, reserve_landmarks) {
   const std::size_t n = static_cast<std::size_t>(std::max(reserve_landmarks, 0));
+  slot_of_id_.reserve(n);
+  free_slots_.reserve(n);
   info_.reserve(n);
   views_.reserve(n);
   patches_.reserve(n * patchBytes());
@@ -16,20 +18,51 @@ LandmarkManager::LandmarkManager(int patch_half_px, int reserve_landmarks)
 void LandmarkManager::add(int id, int frame, ImageView<const std::uint8_t> img, int x, int y,
                           const Eigen::Isometry3d& T_world_cam, const Eigen::Vector3d& p_cam) {
   const std::size_t k = static_cast<std::size_t>(id);
-  if (k >= info_.size()) {
-    info_.resize(k + 1);
-    views_.resize(k + 1);
-    patches_.resize((k + 1) * patchBytes());
+  if (k >= slot_of_id_.size()) slot_of_id_.resize(k + 1, -1);
+  int slot = slot_of_id_[k];
+  if (slot < 0) {
+    if (!free_slots_.empty()) {
+      slot = free_slots_.back();
+      free_slots_.pop_back();
+    } else {
+      slot = static_cast<int>(info_.size());
+      info_.emplace_back();
+      views_.emplace_back();
+      patches_.resize(patches_.size() + patchBytes());
+    }
+    slot_of_id_[k] = slot;
+    ++slots_used_;
   }
-  if (info_[k].id != id) ++count_;
+  const std::size_t sl = static_cast<std::size_t>(slot);
   MapLandmark m;
   m.id = id;
   m.active = true;
   m.created_frame = frame;
   m.last_seen_frame = frame;
-  info_[k] = m;
-  views_[k] = {T_world_cam.linear(), p_cam};
-  copyPatch(img, x, y, big_, patches_.data() + k * patchBytes());
+  info_[sl] = m;
+  views_[sl] = {T_world_cam.linear(), p_cam};
+  copyPatch(img, x, y, big_, patches_.data() + sl * patchBytes());
+}
+
+void LandmarkManager::retire(int id) {
+  MapLandmark& m = info(id);
+  m.active = false;
+  if (m.anchored) return;
+  retired_.insert(m);
+  free_slots_.push_back(static_cast<int>(slotOf(id)));
+  slot_of_id_[static_cast<std::size_t>(id)] = -1;
+  --slots_used_;
+}
+
+std::vector<MapLandmark> LandmarkManager::landmarks() const {
+  std::vector<MapLandmark> out;
+  out.reserve(static_cast<std::size_t>(size()));
+  for (const int slot : slot_of_id_)
+    if (slot >= 0) out.push_back(info_[static_cast<std::size_t>(slot)]);
+  out.insert(out.end(), retired_.landmarks().begin(), retired_.landmarks().end());
+  std::sort(out.begin(), out.end(),
+            [](const MapLandmark& a, const MapLandmark& b) { return a.id < b.id; });
+  return out;
 }
 
 void LandmarkManager::copyPatch(ImageView<const std::uint8_t> img, int x, int y, int half,
@@ -44,7 +77,7 @@ void LandmarkManager::copyPatch(ImageView<const std::uint8_t> img, int x, int y,
 bool LandmarkManager::templateFor(int id, const Eigen::Matrix3d& R_world_cam,
                                   const Eigen::Vector3d& p_cam_now, double f_px,
                                   std::uint8_t* out) const {
-  const View& v = views_[static_cast<std::size_t>(id)];
+  const View& v = views_[slotOf(id)];
   const double z = p_cam_now.z();
   if (!(z > 0.0) || !(v.p_cam.z() > 0.0)) return false;
   Eigen::Matrix<double, 2, 3> J;
@@ -54,7 +87,7 @@ bool LandmarkManager::templateFor(int id, const Eigen::Matrix3d& R_world_cam,
   const double det = A.determinant();
   if (!(std::abs(det) > 1e-6)) return false;
   const Eigen::Matrix2d Ai = A.inverse();  // delta_init = Ai delta_now
-  const std::uint8_t* p = patches_.data() + static_cast<std::size_t>(id) * patchBytes();
+  const std::uint8_t* p = patches_.data() + slotOf(id) * patchBytes();
   const int s = 2 * big_ + 1;
   for (int dy = -h_; dy <= h_; ++dy)
     for (int dx = -h_; dx <= h_; ++dx) {

@@ -11,15 +11,22 @@
 // view (templateFor), when they were last observed, and, once
 // retired from the filter state, their final position and covariance (kept in the map file, out
 // of the state).
-// Storage: flat vectors indexed by id (ids are small, dense and never reused: EkfSlam's), sized
-// for `reserve_landmarks` ids at construction; beyond that they grow by doubling (one allocation
-// per doubling, none per frame in between).
+// Storage: a landmark in the state, or an anchored one (it may come back, SlamSystem step 5),
+// holds a slot: record, view and patch (about 0.7 kB with the default patch). A landmark
+// retired for good (retire()) frees its slot for the next new landmark and goes to the
+// RetiredLandmarkMap (at most one per voxel of voxel_m, about 0.2 kB each), so memory is bounded
+// by the state size, the anchors and the volume the map covers, not by the flight time; what
+// grows per landmark ever created is the id -> slot table, 4 bytes each (ids are EkfSlam's:
+// dense, never reused). Slots and the retired map are preallocated for `reserve_landmarks`;
+// beyond that they grow by doubling (one allocation per doubling, none per frame in between).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <vector>
 
 #include "core/image.hpp"
+#include "slam/map_landmark.hpp"
+#include "slam/retired_landmark_map.hpp"
 
 namespace svslam {
 
@@ -29,22 +36,13 @@ struct PointTrack {
   int anchor = -1;  // a candidate of the first frame: its index in SlamSystem's anchor_points_
 };
 
-struct MapLandmark {
-  int id = -1;
-  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();  // metres
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();      // m^2
-  bool active = false;                                // in the filter state (else retired)
-  int created_frame = 0;
-  int last_seen_frame = 0;
-  int observations = 0;
-  bool anchored = false;  // initialised from the first frame (SlamSystem step 4)
-};
 
 // Appearance and history of landmarks, by id.
 class LandmarkManager {
  public:
   // `reserve_landmarks`: ids (0 .. reserve_landmarks - 1) whose storage is preallocated, >= 0.
-  LandmarkManager(int patch_half_px, int reserve_landmarks);
+  // voxel_m: side of the retired map's voxels, metres, > 0.
+  LandmarkManager(int patch_half_px, int reserve_landmarks, double voxel_m);
   int patchHalf() const { return h_; }
   int patchSide() const { return 2 * h_ + 1; }
   // Registers a new landmark initialised at integer pixel (x, y) of `img`, seen from
@@ -66,29 +64,42 @@ class LandmarkManager {
   // A new observation in `frame`.
   void observed(int id, int frame);
 
-  // Landmark `id` (precondition: contains(id)).
-  MapLandmark& info(int id) { return info_[static_cast<std::size_t>(id)]; }
-  const MapLandmark& info(int id) const { return info_[static_cast<std::size_t>(id)]; }
+  // Landmark `id` holding a slot (precondition: contains(id)).
+  MapLandmark& info(int id) { return info_[slotOf(id)]; }
+  const MapLandmark& info(int id) const { return info_[slotOf(id)]; }
+  // Whether `id` holds a slot: in the state, or anchored.
   bool contains(int id) const {
-    return id >= 0 && id < static_cast<int>(info_.size()) && info(id).id == id;
+    return id >= 0 && id < static_cast<int>(slot_of_id_.size()) &&
+           slot_of_id_[static_cast<std::size_t>(id)] >= 0;
   }
-  int size() const { return count_; }  // landmarks registered
-  // Indexed by id; entries of ids never registered have id -1.
-  const std::vector<MapLandmark>& all() const { return info_; }
+  // Landmark `id` (holding a slot, its record up to date) has left the filter state: an anchored
+  // one keeps its slot (inactive); any other goes to the retired map and frees its slot.
+  void retire(int id);
+  // Landmarks in the map: holding a slot, or kept in the retired map.
+  int size() const { return slots_used_ + retired_.size(); }
+  // Every landmark of the map (slots and retired map), sorted by id.
+  std::vector<MapLandmark> landmarks() const;
+  const RetiredLandmarkMap& retiredMap() const { return retired_; }
 
  private:
   struct View {
     Eigen::Matrix3d R_world_cam;
     Eigen::Vector3d p_cam;
   };
+  std::size_t slotOf(int id) const {
+    return static_cast<std::size_t>(slot_of_id_[static_cast<std::size_t>(id)]);
+  }
   std::size_t patchBytes() const {
     return static_cast<std::size_t>((2 * big_ + 1) * (2 * big_ + 1));
   }
   int h_, big_;
-  int count_ = 0;
-  std::vector<MapLandmark> info_;      // by id
-  std::vector<View> views_;            // by id
-  std::vector<std::uint8_t> patches_;  // by id, patchBytes() each: (4h+1)^2 grey levels
+  std::vector<int> slot_of_id_;        // by id: slot, -1 never registered or retired for good
+  std::vector<int> free_slots_;        // slots to reuse, the last freed first
+  int slots_used_ = 0;
+  std::vector<MapLandmark> info_;      // by slot
+  std::vector<View> views_;            // by slot
+  std::vector<std::uint8_t> patches_;  // by slot, patchBytes() each: (4h+1)^2 grey levels
+  RetiredLandmarkMap retired_;
 };
 
 }  // namespace svslam

@@ -231,7 +231,7 @@ bool SlamSystem::makeRoom(SlamFrameResult& out) {
   if (victim < 0) return false;
   MapLandmark& lm = landmarks_.info(victim);
   if (!ekf_.removeLandmark(victim, &lm.p_world, &lm.cov)) return false;
-  lm.active = false;
+  landmarks_.retire(victim);
   ++out.retired;
   return true;
 }

@@ -35,6 +35,10 @@ struct SlamSystemParams {
   int map_reserve = 4096;  // landmarks ever initialised (in the state or retired) whose map
                            // storage is preallocated (about 0.7 kB each), >= ekf.max_landmarks;
                            // beyond it the storage grows by doubling
+  // A landmark retired from the state for good is kept in the map at most one per cubic voxel
+  // of this side (the best localised), m, > 0: the map is bounded by the volume it covers, not
+  // by the flight time (slam/retired_landmark_map.hpp).
+  double map_voxel_m = 0.25;
   Status validate() const;
 };
 

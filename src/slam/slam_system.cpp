@@ -34,6 +34,8 @@ Status SlamSystemParams::validate() const {
     return Status::invalidArgument("slam.retire_unseen_frames must be >= 1");
   if (!(lost_rot_sigma_rad > 0.0) || !(lost_trans_sigma_m > 0.0))
     return Status::invalidArgument("slam.lost_rot_sigma_rad and lost_trans_sigma_m must be > 0");
+  if (!(map_voxel_m > 0.0) || !std::isfinite(map_voxel_m))
+    return Status::invalidArgument("slam.map_voxel_m must be > 0 and finite");
   if (map_reserve < ekf.max_landmarks)
     return Status::invalidArgument("slam.map_reserve must be >= max_landmarks");
   return Status::ok();
@@ -45,7 +47,7 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
       calib_(calib),
       vo_(odometry, calib),
       ekf_(params.ekf),
-      landmarks_(params.patch_half_px, params.map_reserve),
+      landmarks_(params.patch_half_px, params.map_reserve, params.map_voxel_m),
       landmark_row_matcher_(odometry.stereo_match) {
   init_status_ = params.validate();
   if (init_status_) init_status_ = vo_.initStatus();
@@ -165,13 +167,9 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
 }
 
 std::vector<MapLandmark> SlamSystem::map() const {
-  std::vector<MapLandmark> out;
-  for (const MapLandmark& lm : landmarks_.all()) {
-    if (lm.id < 0) continue;  // an id never registered
-    MapLandmark m = lm;
+  std::vector<MapLandmark> out = landmarks_.landmarks();
+  for (MapLandmark& m : out)
     if (m.active) (void)ekf_.landmark(m.id, m.p_world, m.cov);
-    out.push_back(m);
-  }
   return out;
 }
 
