@@ -11,6 +11,7 @@
 #include <map>
 #include <mutex>
 
+#include "drivers/camera/camera_faults.hpp"
 #include "drivers/camera/pixel_formats.hpp"
 #include "drivers/camera/v4l2_source.hpp"
 
@@ -156,8 +157,12 @@ class LcCamera {
 
 class LibcameraStereoSource final : public StereoSource {
  public:
-  LibcameraStereoSource(std::unique_ptr<lc::CameraManager> manager, TimeNs sync_ns, int timeout_ms)
-      : manager_(std::move(manager)), pairer_(sync_ns), timeout_ms_(timeout_ms) {}
+  LibcameraStereoSource(std::unique_ptr<lc::CameraManager> manager, TimeNs sync_ns, int timeout_ms,
+                        FrozenCameraParams frozen, std::vector<std::string> ids)
+      : manager_(std::move(manager)),
+        pairer_(sync_ns),
+        timeout_ms_(timeout_ms),
+        frozen_(frozen, std::move(ids)) {}
   ~LibcameraStereoSource() override {
     cams_[0].reset();
     cams_[1].reset();
@@ -184,10 +189,34 @@ class LibcameraStereoSource final : public StereoSource {
     TimeNs t_ns = 0;
     auto r = nextRaw(raw_left_, raw_right_, t_ns);
     if (!r || !*r) return r;
+    std::string warning;
+    for (int c = 0; c < 2; ++c)
+      if (Status s = frozen_.check(c, (c == 0 ? raw_left_ : raw_right_).cview(), warning); !s)
+        return s;
+    if (!warning.empty()) {
+      std::lock_guard<std::mutex> lock(warn_mutex_);
+      warnings_ += warning + "\n";
+    }
     if (Status s = rect_.apply(raw_left_, raw_right_, out); !s) return s;
     out.index = index_++;
     out.t_ns = t_ns;
     return true;
+  }
+  std::string takeWarnings() override {
+    std::lock_guard<std::mutex> lock(warn_mutex_);
+    std::string w;
+    w.swap(warnings_);
+    return w;
+  }
+  std::vector<std::pair<std::string, std::int64_t>> counters() const override {
+    std::vector<std::pair<std::string, std::int64_t>> c;
+    for (int i = 0; i < 2; ++i) {
+      const std::string p = i == 0 ? "left_" : "right_";
+      c.emplace_back(p + "unpaired", static_cast<std::int64_t>(pairer_.dropped(i)));
+      c.emplace_back(p + "frozen", static_cast<std::int64_t>(frozen_.detections(i)));
+      c.emplace_back(p + "max_identical_run", frozen_.maxRun(i));
+    }
+    return c;
   }
 
  private:
@@ -196,8 +225,11 @@ class LibcameraStereoSource final : public StereoSource {
   StereoRectification rect_;
   TimestampPairer pairer_;
   int timeout_ms_;
+  FrozenCameraWatch frozen_;
   ImageU8 raw_left_, raw_right_;
   int index_ = 0;
+  std::mutex warn_mutex_;
+  std::string warnings_;
 };
 
 class LibcameraRawCapture final : public RawStereoCapture {
@@ -214,9 +246,12 @@ class LibcameraRawCapture final : public RawStereoCapture {
 // raw: no calibration file needed (the rectification stays empty and only nextRaw is used).
 Result<std::unique_ptr<LibcameraStereoSource>> openLibcamera(const std::string& spec_after_prefix,
                                                              bool raw) {
-  auto spec = parseCameraSpec(spec_after_prefix, "libcamera",
-                              {"width", "height", "calib", "sync_ms", "timeout_ms"});
+  auto spec = parseCameraSpec(
+      spec_after_prefix, "libcamera",
+      {"width", "height", "calib", "sync_ms", "timeout_ms", "frozen_frames", "frozen_action"});
   if (!spec) return spec.status();
+  auto frozen = parseFrozenOptions(*spec, "libcamera");
+  if (!frozen) return frozen.status();
   if (spec->devices.size() != 2)
     return Status::invalidArgument("libcamera: two camera ids needed (ID_LEFT,ID_RIGHT), got " +
                                    std::to_string(spec->devices.size()));
@@ -274,7 +309,8 @@ Result<std::unique_ptr<LibcameraStereoSource>> openLibcamera(const std::string& 
     rect = std::move(loaded).value();
   }
   auto source = std::make_unique<LibcameraStereoSource>(
-      std::move(manager), static_cast<TimeNs>(sync_ms * static_cast<double>(kNsPerMs)), timeout_ms);
+      std::move(manager), static_cast<TimeNs>(sync_ms * static_cast<double>(kNsPerMs)), timeout_ms,
+      *frozen, spec->devices);
   if (Status s = source->init(cams, width, height, std::move(rect)); !s) return s;
   return source;
 }

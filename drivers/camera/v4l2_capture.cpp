@@ -43,8 +43,9 @@ Status V4l2CaptureParams::validate() const {
     return Status::invalidArgument("v4l2 capture " + device + ": buffers must be in [2, 32]");
   if (timeout_ms < 1 || timeout_ms > 60000)
     return Status::invalidArgument("v4l2 capture " + device + ": timeout_ms must be in [1, 60000]");
-  if (max_retries < 0 || max_retries > 1000)
-    return Status::invalidArgument("v4l2 capture " + device + ": max_retries must be in [0, 1000]");
+  if (max_bad_buffers < 0 || max_bad_buffers > 10000)
+    return Status::invalidArgument("v4l2 capture " + device +
+                                   ": max_bad_buffers must be in [0, 10000]");
   return Status::ok();
 }
 
@@ -188,7 +189,7 @@ Status V4l2Capture::queueBuffer(std::uint32_t index) {
 
 Status V4l2Capture::dropBuffer(const std::string& why) {
   ++stats_.dropped;
-  if (++errors_in_row_ > params_.max_retries)
+  if (++errors_in_row_ > params_.max_bad_buffers)
     return Status::ioError(params_.device + ": " + std::to_string(errors_in_row_) +
                            " bad buffers in a row (last: " + why + ")");
   return Status::ok();
@@ -198,9 +199,24 @@ Result<bool> V4l2Capture::grab(ImageU8& grey_out, TimeNs& t_ns_out, std::uint32_
   if (!streaming_ || unplugged_) return false;
   int eagain_in_row = 0;
   auto failed = [](Status s) -> Result<bool> { return s; };
-  for (;;) {
+  const std::uint64_t dropped_before = stats_.dropped;
+  auto timedOut = [&]() -> Result<bool> {
+    const std::uint64_t bad = stats_.dropped - dropped_before;
+    return Status::ioError("timeout: no frame from " + params_.device + " within " +
+                           std::to_string(params_.timeout_ms) + " ms" +
+                           (bad > 0 ? " (" + std::to_string(bad) + " bad buffers)" : ""));
+  };
+  // The whole call waits at most timeout_ms, also when bad buffers or EAGAIN keep coming.
+  const TimeNs deadline = monotonicNowNs() + params_.timeout_ms * kNsPerMs;
+  for (bool first = true;; first = false) {
+    int wait_ms = params_.timeout_ms;
+    if (!first) {
+      const TimeNs left = deadline - monotonicNowNs();
+      if (left <= 0) return timedOut();
+      wait_ms = static_cast<int>((left + kNsPerMs - 1) / kNsPerMs);
+    }
     pollfd pfd{fd_, POLLIN, 0};
-    const int pr = dev_.poll(&pfd, 1, params_.timeout_ms);
+    const int pr = dev_.poll(&pfd, 1, wait_ms);
     if (pr < 0) {
       if (errno == EINTR) {
         ++stats_.retries;
@@ -208,9 +224,7 @@ Result<bool> V4l2Capture::grab(ImageU8& grey_out, TimeNs& t_ns_out, std::uint32_
       }
       return failed(fail("poll", errno));
     }
-    if (pr == 0)
-      return failed(Status::ioError("timeout: no frame from " + params_.device + " within " +
-                                    std::to_string(params_.timeout_ms) + " ms"));
+    if (pr == 0) return timedOut();
     v4l2_buffer buf{};
     buf.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     buf.memory = V4L2_MEMORY_MMAP;

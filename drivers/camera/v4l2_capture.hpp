@@ -15,9 +15,11 @@
 //
 // Recovery in grab(): EAGAIN / EINTR -> poll again (counted in retries); EIO or a buffer with
 // V4L2_BUF_FLAG_ERROR (or a frame that does not convert, e.g. corrupt MJPEG) -> the buffer is
-// requeued and counted in dropped; more than max_retries such buffers in a row -> error;
-// ENODEV -> "device unplugged: /dev/videoN"; no frame within timeout_ms -> error naming the
-// device. The device interface is injected (tests drive a fake).
+// requeued and counted in dropped; more than max_bad_buffers such buffers in a row -> error
+// "/dev/videoN: K bad buffers in a row (last: ...)"; ENODEV -> "device unplugged: /dev/videoN"
+// (unplugged() then true; stop() and open() again once the device is back); no frame within
+// timeout_ms of the call, whatever came instead -> "timeout: no frame from /dev/videoN within
+// T ms". The device interface is injected (tests drive a fake).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -38,7 +40,7 @@ struct V4l2CaptureParams {
   std::string format = "GREY";  // "GREY", "YUYV" or "MJPEG"
   int buffers = 4;              // mmap buffers requested, [2, 32]
   int timeout_ms = 1000;        // longest wait for one frame, ms, [1, 60000]
-  int max_retries = 3;          // errored buffers tolerated in a row, [0, 1000]
+  int max_bad_buffers = 30;     // errored buffers tolerated in a row, [0, 10000]
   Status validate() const;
 };
 
@@ -70,6 +72,8 @@ class V4l2Capture {
   Status stop();
 
   bool streaming() const { return streaming_; }
+  // True after grab() met ENODEV, until the next successful open().
+  bool unplugged() const { return unplugged_; }
   const V4l2CaptureParams& params() const { return params_; }
   const V4l2CaptureStats& stats() const { return stats_; }
   // The frame rate the driver reports after S_PARM, Hz (0 when unknown).
@@ -84,7 +88,7 @@ class V4l2Capture {
   Status negotiateFormat();
   Status mapBuffers();
   Status queueBuffer(std::uint32_t index);
-  // Counts an errored buffer; the error once more than max_retries happened in a row.
+  // Counts an errored buffer; the error once more than max_bad_buffers happened in a row.
   Status dropBuffer(const std::string& why);
 
   V4l2Device& dev_;

@@ -2,7 +2,9 @@
 // (see v4l2_source.hpp).
 #include "drivers/camera/v4l2_source.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -147,46 +149,218 @@ Result<bool> TimestampPairer::next(const GrabFn& grab, ImageU8& left, ImageU8& r
   return true;
 }
 
-V4l2StereoSource::V4l2StereoSource(std::vector<std::unique_ptr<V4l2Capture>> captures,
-                                   StereoRectification rect, TimeNs sync_tolerance_ns)
-    : captures_(std::move(captures)), rect_(std::move(rect)), pairer_(sync_tolerance_ns) {}
+namespace {
 
-Result<bool> V4l2StereoSource::next(StereoFrame& out) {
-  TimeNs t_ns = 0;
+std::vector<std::string> cameraNames(const std::vector<std::unique_ptr<V4l2Capture>>& caps) {
+  std::vector<std::string> names;
+  for (const auto& c : caps) names.push_back(c->params().device);
+  return names;
+}
+
+std::string secondsText(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", s);
+  return buf;
+}
+
+}  // namespace
+
+V4l2StereoSource::V4l2StereoSource(std::vector<std::unique_ptr<V4l2Capture>> captures,
+                                   StereoRectification rect, V4l2SourceOptions options)
+    : captures_(std::move(captures)),
+      rect_(std::move(rect)),
+      options_(std::move(options)),
+      clock_(options_.clock ? options_.clock : &systemReconnectClock()),
+      pairer_(options_.sync_tolerance_ns),
+      frozen_(options_.frozen, cameraNames(captures_)) {}
+
+Result<bool> V4l2StereoSource::grabRaw(TimeNs& t_ns) {
   std::uint32_t seq = 0;
   if (captures_.size() == 1) {
     auto r = captures_[0]->grab(full_, t_ns, seq);
     if (!r || !*r) return r;
+    return true;
+  }
+  return pairer_.next(
+      [this, &seq](int c, ImageU8& img, TimeNs& t) {
+        return captures_[static_cast<std::size_t>(c)]->grab(img, t, seq);
+      },
+      raw_left_, raw_right_, t_ns);
+}
+
+void V4l2StereoSource::warn(const std::string& line) {
+  std::lock_guard<std::mutex> lock(warn_mutex_);
+  warnings_ += line + "\n";
+}
+
+std::string V4l2StereoSource::takeWarnings() {
+  std::lock_guard<std::mutex> lock(warn_mutex_);
+  std::string w;
+  w.swap(warnings_);
+  return w;
+}
+
+Result<bool> V4l2StereoSource::reconnect(const Status& unplugged) {
+  const ReconnectParams& rp = options_.reconnect;
+  for (auto& c : captures_) (void)c->stop();
+  pairer_.reset();
+  frozen_.reset();
+  const TimeNs start = clock_->nowNs();
+  // Unplugged again before a pair came through: the same outage, the same deadline.
+  if (!reconnected_) {
+    ++reconnects_;
+    outage_start_ns_ = start;
+    warn(unplugged.message() + ": reconnecting (every " + std::to_string(rp.interval_ms) +
+         " ms for up to " + secondsText(rp.timeout_s) + " s)");
+  }
+  reconnected_ = false;
+  const TimeNs deadline = outage_start_ns_ + secondsToNs(rp.timeout_s);
+  const TimeNs interval = rp.interval_ms * kNsPerMs;
+  for (int attempt = 1;; ++attempt) {
+    if (options_.stop && options_.stop()) {
+      reconnect_wait_ns_ += clock_->nowNs() - start;
+      return false;
+    }
+    Status s;
+    for (auto& c : captures_) {
+      s = c->open();
+      if (!s) break;
+    }
+    const TimeNs now = clock_->nowNs();
+    if (s) {
+      reconnect_wait_ns_ += now - start;
+      reconnected_ = true;
+      warn("reconnected " + captures_[0]->params().device +
+           (captures_.size() > 1 ? "," + captures_[1]->params().device : "") + " after " +
+           std::to_string((now - outage_start_ns_) / kNsPerMs) + " ms");
+      return true;
+    }
+    for (auto& c : captures_) (void)c->stop();
+    if (now >= deadline) {
+      reconnect_wait_ns_ += now - start;
+      return Status::ioError(unplugged.message() + " (not back within " +
+                             secondsText(rp.timeout_s) + " s, " + std::to_string(attempt) +
+                             " attempts; last: " + s.message() + ")");
+    }
+    if (clock_->waitNs(std::min(interval, deadline - now), options_.stop)) {
+      reconnect_wait_ns_ += clock_->nowNs() - start;
+      return false;
+    }
+  }
+}
+
+Result<bool> V4l2StereoSource::next(StereoFrame& out) {
+  TimeNs t_ns = 0;
+  for (;;) {
+    auto r = grabRaw(t_ns);
+    if (r) {
+      if (!*r) return r;
+      break;
+    }
+    const bool unplugged = std::any_of(captures_.begin(), captures_.end(),
+                                       [](const auto& c) { return c->unplugged(); });
+    if (!unplugged || options_.reconnect.timeout_s <= 0.0) return r;
+    auto back = reconnect(r.status());
+    if (!back || !*back) return back;
+  }
+  std::string warning;
+  if (captures_.size() == 1) {
+    if (Status s = frozen_.check(0, full_.cview(), warning); !s) return s;
     if (Status s = splitSideBySide(full_, raw_left_, raw_right_); !s) return s;
   } else {
-    auto r = pairer_.next(
-        [this, &seq](int c, ImageU8& img, TimeNs& t) {
-          return captures_[static_cast<std::size_t>(c)]->grab(img, t, seq);
-        },
-        raw_left_, raw_right_, t_ns);
-    if (!r || !*r) return r;
+    for (int c = 0; c < 2; ++c)
+      if (Status s = frozen_.check(c, (c == 0 ? raw_left_ : raw_right_).cview(), warning); !s)
+        return s;
   }
+  if (!warning.empty()) warn(warning);
+  if (reconnected_ && have_last_t_) {
+    const double fps =
+        captures_[0]->grantedFps() > 0.0 ? captures_[0]->grantedFps() : captures_[0]->params().fps;
+    const double periods = nsToSeconds(t_ns - last_t_ns_) * fps;
+    if (periods > 1.0) frames_lost_ += static_cast<std::uint64_t>(std::llround(periods)) - 1;
+  }
+  reconnected_ = false;
+  have_last_t_ = true;
+  last_t_ns_ = t_ns;
   if (Status s = rect_.apply(raw_left_, raw_right_, out); !s) return s;
   out.index = index_++;
   out.t_ns = t_ns;
   return true;
 }
 
+std::vector<std::pair<std::string, std::int64_t>> V4l2StereoSource::counters() const {
+  std::vector<std::pair<std::string, std::int64_t>> c;
+  auto add = [&c](const std::string& name, std::uint64_t v) {
+    c.emplace_back(name, static_cast<std::int64_t>(v));
+  };
+  add("reconnects", reconnects_);
+  add("reconnect_frames_lost", frames_lost_);
+  add("reconnect_wait_ms", static_cast<std::uint64_t>(reconnect_wait_ns_ / kNsPerMs));
+  for (std::size_t i = 0; i < captures_.size(); ++i) {
+    const std::string p = captures_.size() == 1 ? "sbs_" : (i == 0 ? "left_" : "right_");
+    const V4l2CaptureStats& st = captures_[i]->stats();
+    add(p + "frames", st.frames);
+    add(p + "dropped", st.dropped);
+    add(p + "retries", st.retries);
+    add(p + "non_monotonic", st.non_monotonic);
+    add(p + "sequence_gaps", st.sequence_gaps);
+    add(p + "software_timestamps", st.software_timestamps);
+    if (captures_.size() == 2) add(p + "unpaired", pairer_.dropped(static_cast<int>(i)));
+    add(p + "frozen", frozen_.detections(static_cast<int>(i)));
+    add(p + "max_identical_run", static_cast<std::uint64_t>(frozen_.maxRun(static_cast<int>(i))));
+  }
+  return c;
+}
+
+Result<FrozenCameraParams> parseFrozenOptions(const CameraSpec& spec, const std::string& scheme) {
+  FrozenCameraParams p;
+  auto frames = integer(spec, "frozen_frames", p.detector.frozen_frames, scheme);
+  if (!frames) return frames.status();
+  p.detector.frozen_frames = *frames;
+  if (Status s = p.detector.validate(); !s)
+    return Status::invalidArgument(scheme + ": option " + s.message());
+  if (auto it = spec.options.find("frozen_action"); it != spec.options.end()) {
+    if (it->second != "error" && it->second != "warn")
+      return Status::invalidArgument(
+          scheme + ": option frozen_action must be 'error' or 'warn', got '" + it->second + "'");
+    p.end_run = it->second == "error";
+  }
+  return p;
+}
+
 Result<V4l2Setup> parseV4l2Setup(const std::string& spec_after_prefix) {
-  auto spec = parseCameraSpec(
-      spec_after_prefix, "v4l2",
-      {"width", "height", "fps", "format", "calib", "sync_ms", "layout", "buffers", "timeout_ms"});
+  auto spec = parseCameraSpec(spec_after_prefix, "v4l2",
+                              {"width", "height", "fps", "format", "calib", "sync_ms", "layout",
+                               "buffers", "timeout_ms", "max_bad_buffers", "reconnect_timeout_s",
+                               "reconnect_interval_ms", "frozen_frames", "frozen_action"});
   if (!spec) return spec.status();
   V4l2CaptureParams p;
+  ReconnectParams rp;
   auto width = integer(*spec, "width", p.width, "v4l2");
   auto height = integer(*spec, "height", p.height, "v4l2");
   auto fps = number(*spec, "fps", p.fps, "v4l2");
   auto sync_ms = number(*spec, "sync_ms", 5.0, "v4l2");
   auto buffers = integer(*spec, "buffers", p.buffers, "v4l2");
   auto timeout = integer(*spec, "timeout_ms", p.timeout_ms, "v4l2");
-  for (const Status* s : {&width.status(), &height.status(), &fps.status(), &sync_ms.status(),
-                          &buffers.status(), &timeout.status()})
+  auto bad = integer(*spec, "max_bad_buffers", p.max_bad_buffers, "v4l2");
+  auto rec_timeout = number(*spec, "reconnect_timeout_s", rp.timeout_s, "v4l2");
+  auto rec_interval = integer(*spec, "reconnect_interval_ms", rp.interval_ms, "v4l2");
+  for (const Status* s :
+       {&width.status(), &height.status(), &fps.status(), &sync_ms.status(), &buffers.status(),
+        &timeout.status(), &bad.status(), &rec_timeout.status(), &rec_interval.status()})
     if (!*s) return *s;
+  auto frozen = parseFrozenOptions(*spec, "v4l2");
+  if (!frozen) return frozen.status();
+  if (!(*rec_timeout >= 0.0 && *rec_timeout <= 3600.0))
+    return Status::invalidArgument("v4l2: option reconnect_timeout_s must be in [0, 3600] s, got " +
+                                   spec->options.at("reconnect_timeout_s"));
+  if (*rec_interval < 10 || *rec_interval > 60000)
+    return Status::invalidArgument(
+        "v4l2: option reconnect_interval_ms must be in [10, 60000] ms, got " +
+        spec->options.at("reconnect_interval_ms"));
+  if (*bad < 0 || *bad > 10000)
+    return Status::invalidArgument("v4l2: option max_bad_buffers must be in [0, 10000], got " +
+                                   spec->options.at("max_bad_buffers"));
   const auto& opt = spec->options;
   const std::string layout = opt.count("layout") ? opt.at("layout") : "stereo";
   if (layout != "stereo" && layout != "side-by-side")
@@ -208,6 +382,7 @@ Result<V4l2Setup> parseV4l2Setup(const std::string& spec_after_prefix) {
   p.fps = *fps;
   p.buffers = *buffers;
   p.timeout_ms = *timeout;
+  p.max_bad_buffers = *bad;
   if (opt.count("format")) p.format = opt.at("format");
   if (sbs && p.width % 2 != 0)
     return Status::invalidArgument("v4l2: side-by-side width must be even");
@@ -221,6 +396,9 @@ Result<V4l2Setup> parseV4l2Setup(const std::string& spec_after_prefix) {
   setup.side_by_side = sbs;
   setup.sync_tolerance_ns =
       static_cast<TimeNs>(std::llround(*sync_ms * static_cast<double>(kNsPerMs)));
+  setup.reconnect.timeout_s = *rec_timeout;
+  setup.reconnect.interval_ms = *rec_interval;
+  setup.frozen = *frozen;
   if (opt.count("calib")) setup.calib = opt.at("calib");
   return setup;
 }
@@ -238,7 +416,8 @@ Result<std::vector<std::unique_ptr<V4l2Capture>>> openV4l2Captures(const V4l2Set
 }
 
 Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix,
-                                                     V4l2Device& device) {
+                                                     V4l2Device& device, const StopQuery& stop,
+                                                     ReconnectClock* clock) {
   auto setup = parseV4l2Setup(spec_after_prefix);
   if (!setup) return setup.status();
   if (setup->calib.empty())
@@ -248,12 +427,19 @@ Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_aft
   if (!rect) return rect.status();
   auto caps = openV4l2Captures(*setup, device);
   if (!caps) return caps.status();
+  V4l2SourceOptions o;
+  o.sync_tolerance_ns = setup->sync_tolerance_ns;
+  o.reconnect = setup->reconnect;
+  o.frozen = setup->frozen;
+  o.stop = stop;
+  o.clock = clock;
   return std::unique_ptr<StereoSource>(std::make_unique<V4l2StereoSource>(
-      std::move(caps).value(), std::move(rect).value(), setup->sync_tolerance_ns));
+      std::move(caps).value(), std::move(rect).value(), std::move(o)));
 }
 
-Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix) {
-  return openV4l2Source(spec_after_prefix, systemV4l2Device());
+Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix,
+                                                     const StopQuery& stop) {
+  return openV4l2Source(spec_after_prefix, systemV4l2Device(), stop);
 }
 
 }  // namespace svslam::drivers

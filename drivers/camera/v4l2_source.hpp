@@ -9,7 +9,23 @@
 // Options (query string, '&'-separated key=value): width, height (px, default 640x480),
 // fps (Hz, default 30), format (GREY|YUYV|MJPEG, default GREY), calib=FILE (required),
 // sync_ms (pairing tolerance, ms, default 5), layout (stereo|side-by-side), buffers (default 4),
-// timeout_ms (per frame, default 1000). An unknown key is an error naming it.
+// timeout_ms (per frame, default 1000), max_bad_buffers (errored buffers in a row, default 30),
+// reconnect_timeout_s (default 5; 0 = none), reconnect_interval_ms (default 200),
+// frozen_frames (default 30; 0 = off), frozen_action (error|warn, default error). An unknown key
+// or a value out of range is an error naming it.
+//
+// Unplug (a capture meets ENODEV): with reconnect_timeout_s > 0 the source stops every capture
+// and opens them all again (open, format, buffers, STREAMON) right away and then every
+// reconnect_interval_ms until they all open or reconnect_timeout_s has passed, then goes on
+// with the next pair; frames lost = round(gap * fps) - 1 with gap the time between the pairs
+// before and after (counted, with the reconnects, in counters()). Not back in time: the error
+// "device unplugged: /dev/videoN (not back within T s, K attempts; last: ...)"; with
+// reconnect_timeout_s = 0 at once "device unplugged: /dev/videoN". The wait polls the stop
+// query: a stop request ends the stream (next() false).
+//
+// Frozen camera: each device's raw frames go through a FrozenFrameDetector (camera_faults.hpp);
+// frozen_frames identical frames in a row -> "camera frozen: /dev/videoN delivered the same
+// image for N frames", the run's error (frozen_action=error) or a warning (warn).
 //
 // Calibration file (OpenCV FileStorage YAML/XML/JSON): K1, D1, K2, D2 (intrinsics and
 // distortion of the left/right raw cameras), R, T (p_right = R p_left + T, T in metres),
@@ -21,14 +37,16 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <opencv2/core.hpp>
 #include <set>
 #include <string>
 #include <vector>
 
-#include "drivers/source/stereo_source.hpp"
+#include "drivers/camera/camera_faults.hpp"
 #include "drivers/camera/v4l2_capture.hpp"
 #include "drivers/camera/v4l2_device.hpp"
+#include "drivers/source/stereo_source.hpp"
 
 namespace svslam::drivers {
 
@@ -61,6 +79,8 @@ class TimestampPairer {
       : tolerance_ns_(tolerance_ns), max_drops_(max_drops_in_row) {}
   // True with a pair (t_ns = left timestamp); false when a camera ended.
   Result<bool> next(const GrabFn& grab, ImageU8& left, ImageU8& right, TimeNs& t_ns);
+  // Forgets the frames waiting for a partner (the cameras restarted); counts stay.
+  void reset() { have_ = {false, false}; }
   std::uint64_t dropped(int camera) const { return dropped_[static_cast<std::size_t>(camera)]; }
 
  private:
@@ -72,24 +92,63 @@ class TimestampPairer {
   std::array<std::uint64_t, 2> dropped_{};
 };
 
+// Spec options reconnect_timeout_s and reconnect_interval_ms.
+struct ReconnectParams {
+  double timeout_s = 5.0;  // how long to try to reopen unplugged cameras, s, [0, 3600]; 0 = never
+  int interval_ms = 200;   // between two attempts, ms, [10, 60000]
+};
+
+// What a V4l2StereoSource needs besides its captures and rectification.
+struct V4l2SourceOptions {
+  TimeNs sync_tolerance_ns = 5 * kNsPerMs;
+  ReconnectParams reconnect;
+  FrozenCameraParams frozen;
+  StopQuery stop;                   // polled while waiting to reconnect; empty = never stop
+  ReconnectClock* clock = nullptr;  // nullptr = systemReconnectClock(); must outlive the source
+};
+
 class V4l2StereoSource final : public StereoSource {
  public:
   // One capture = side-by-side, two = left and right cameras; all already open.
   V4l2StereoSource(std::vector<std::unique_ptr<V4l2Capture>> captures, StereoRectification rect,
-                   TimeNs sync_tolerance_ns);
+                   V4l2SourceOptions options);
   const StereoCalibration& calibration() const override { return rect_.calib; }
   int size() const override { return -1; }
   Result<bool> next(StereoFrame& out) override;
+  std::string takeWarnings() override;
+  // reconnects, reconnect_frames_lost, reconnect_wait_ms, then per camera (left_, right_; one
+  // device side by side: sbs_) frames, dropped, retries, non_monotonic, sequence_gaps,
+  // software_timestamps, unpaired (two cameras), frozen, max_identical_run.
+  std::vector<std::pair<std::string, std::int64_t>> counters() const override;
   // Frames dropped by the pairing, per camera (0 left, 1 right).
   std::uint64_t unpairedDrops(int camera) const { return pairer_.dropped(camera); }
   const V4l2Capture& capture(int i) const { return *captures_[static_cast<std::size_t>(i)]; }
+  std::uint64_t reconnects() const { return reconnects_; }
+  std::uint64_t framesLostReconnecting() const { return frames_lost_; }
+  std::uint64_t frozenDetections(int camera) const { return frozen_.detections(camera); }
 
  private:
+  Result<bool> grabRaw(TimeNs& t_ns);
+  // After an unplug: true once every capture streams again, false when stopped, else the error.
+  Result<bool> reconnect(const Status& unplugged);
+  void warn(const std::string& line);
+
   std::vector<std::unique_ptr<V4l2Capture>> captures_;
   StereoRectification rect_;
+  V4l2SourceOptions options_;
+  ReconnectClock* clock_;
   TimestampPairer pairer_;
+  FrozenCameraWatch frozen_;
   ImageU8 full_, raw_left_, raw_right_;
   int index_ = 0;
+  bool have_last_t_ = false;
+  TimeNs last_t_ns_ = 0;
+  bool reconnected_ = false;  // the next pair is the first after a reconnect
+  TimeNs outage_start_ns_ = 0;
+  std::uint64_t reconnects_ = 0, frames_lost_ = 0;
+  TimeNs reconnect_wait_ns_ = 0;
+  std::mutex warn_mutex_;
+  std::string warnings_;
 };
 
 // The v4l2: spec checked and split (everything but the calibration file, which is only named).
@@ -98,6 +157,8 @@ struct V4l2Setup {
   std::vector<std::string> devices;  // one (side-by-side) or two (left, right)
   bool side_by_side = false;
   TimeNs sync_tolerance_ns = 0;
+  ReconnectParams reconnect;
+  FrozenCameraParams frozen;
   std::string calib;  // calib=FILE, "" when absent
   int viewWidth() const { return side_by_side ? params.width / 2 : params.width; }
 };
@@ -106,10 +167,17 @@ Result<V4l2Setup> parseV4l2Setup(const std::string& spec_after_prefix);
 Result<std::vector<std::unique_ptr<V4l2Capture>>> openV4l2Captures(const V4l2Setup& setup,
                                                                    V4l2Device& device);
 
-// `spec_after_prefix` = the spec without "v4l2:". Opens and starts the camera(s).
+// frozen_frames and frozen_action of a camera spec (scheme "v4l2" or "libcamera" in messages).
+Result<FrozenCameraParams> parseFrozenOptions(const CameraSpec& spec, const std::string& scheme);
+
+// `spec_after_prefix` = the spec without "v4l2:". Opens and starts the camera(s). `stop` is
+// polled while the source waits for an unplugged camera; `clock` (nullptr = the system's) must
+// outlive the source.
 Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix,
-                                                     V4l2Device& device);
+                                                     V4l2Device& device, const StopQuery& stop = {},
+                                                     ReconnectClock* clock = nullptr);
 // Same through the process-wide SystemV4l2Device.
-Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix);
+Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_after_prefix,
+                                                     const StopQuery& stop = {});
 
 }  // namespace svslam::drivers

@@ -16,6 +16,9 @@ class PreloadedSource final : public StereoSource {
   Result<bool> next(StereoFrame& out) override;
   int skippedFrames() const override { return inner_->skippedFrames(); }
   std::string skippedFramesDetail() const override { return inner_->skippedFramesDetail(); }
+  std::vector<std::pair<std::string, std::int64_t>> counters() const override {
+    return inner_->counters();
+  }
   bool groundTruth(int index, Eigen::Isometry3d& T_first_cam) const override {
     return inner_->groundTruth(index, T_first_cam);
   }

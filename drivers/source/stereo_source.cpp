@@ -36,7 +36,7 @@ Result<std::unique_ptr<StereoSource>> openStereoSource(const std::string& spec,
   if (kind == "kitti") return openKittiSource(arg);
   if (kind == "euroc") return openEurocSource(arg);
   if (kind == "lcm") return openLcmSource(arg, stop);
-  if (kind == "v4l2") return openV4l2Source(arg);
+  if (kind == "v4l2") return openV4l2Source(arg, stop);
 #ifdef SVSLAM_HAVE_LIBCAMERA
   if (kind == "libcamera") return openLibcameraSource(arg);
 #else

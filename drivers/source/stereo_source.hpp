@@ -12,9 +12,12 @@
 //   synthetic[:key=value,...]  rendered stereo flight over a textured heightfield with exact
 //              ground truth (synthetic_flight.hpp); the built-in default source.
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/camera.hpp"
 #include "core/image.hpp"
@@ -43,6 +46,12 @@ class StereoSource {
   // Reads the next pair into `out` (buffers reused); returns false at the end of the sequence.
   // A missing or corrupt image is an error naming the file.
   virtual Result<bool> next(StereoFrame& out) = 0;
+  // Events worth a log line since the last call (live cameras: reconnected, frozen), one per
+  // line; "" when none. Thread-safe: may be called while another thread is in next().
+  virtual std::string takeWarnings() { return ""; }
+  // The source's own counters for stats.json (live cameras: frames, dropped buffers,
+  // reconnects...), in a fixed order; empty when it has none. Not while next() runs.
+  virtual std::vector<std::pair<std::string, std::int64_t>> counters() const { return {}; }
   // Ground-truth pose of frame `index` when the source knows it exactly (synthetic): the left
   // camera in the frame of the first left camera (KITTI convention). False otherwise.
   virtual bool groundTruth(int index, Eigen::Isometry3d& T_first_cam) const {

@@ -2,6 +2,7 @@
 // covariances, the map and stats, publishing on LCM, under systemd when started as a service.
 #include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -32,6 +33,17 @@ namespace {
 void logLine(const std::string& msg) {
   std::fprintf(stderr, "svslam run: %s\n", msg.c_str());
   std::fflush(stderr);
+}
+
+// One "warning: ..." log line per line of `lines`.
+void logWarnings(const std::string& lines) {
+  std::size_t start = 0;
+  while (start < lines.size()) {
+    std::size_t end = lines.find('\n', start);
+    if (end == std::string::npos) end = lines.size();
+    if (end > start) logLine("warning: " + lines.substr(start, end - start));
+    start = end + 1;
+  }
 }
 
 // Applies the command-line overrides to the configuration.
@@ -250,7 +262,8 @@ int runPipeline(const std::vector<std::string>& args) {
   }
   const std::string source_spec = p.has("source") ? p.get("source") : cfg.source;
   const std::string out_dir = p.get("out");
-  bool stopped_while_opening = false;
+  // Also polled by a live source during the run (v4l2: waiting for an unplugged camera).
+  std::atomic<bool> stopped_while_opening{false};
   const drivers::StopQuery stop = [&] { return stopped_while_opening = service::stopRequested(); };
   auto opened = drivers::openStereoSource(source_spec, stop);
   if (!opened && stopped_while_opening)
@@ -324,7 +337,7 @@ int runPipeline(const std::vector<std::string>& args) {
   std::int64_t next_progress = rt::steadyNowNs() + progress_ns;
   auto tick = [&] {
     const std::int64_t now = rt::steadyNowNs();
-    if (const std::string w = work.takeWarnings(); !w.empty()) logLine("warning: " + w);
+    logWarnings(work.takeWarnings());
     if (service::stopRequested() && !control.stop) {
       control.stop = true;
       if (!stopping_sent) {
@@ -361,6 +374,7 @@ int runPipeline(const std::vector<std::string>& args) {
   };
   const Status run_status = runner.run(slots, control, tick);
   if (!stopping_sent) notifier.stopping();
+  logWarnings(work.takeWarnings());
 
   std::string error = run_status ? "" : run_status.message();
   if (Status s = work.finish(); !s && error.empty()) error = s.message();
@@ -369,6 +383,7 @@ int runPipeline(const std::vector<std::string>& args) {
   run::RunSummary summary = work.summary();
   summary.source_frames_skipped = source->skippedFrames();
   summary.source_frames_skipped_detail = source->skippedFramesDetail();
+  summary.source_counters = source->counters();
   if (lcm) {
     refused_log.update(*lcm, rt::steadyNowNs(), true);
     summary.lcm_commands = lcm->commandCounts();

@@ -126,9 +126,10 @@ void SlamStages::onThreadStart(const std::string& stage) {
 }
 
 std::string SlamStages::takeWarnings() {
+  std::string w = source_.takeWarnings();  // thread-safe by contract
   std::lock_guard<std::mutex> lock(warn_mutex_);
-  std::string w;
-  w.swap(warnings_);
+  w += warnings_;
+  warnings_.clear();
   return w;
 }
 

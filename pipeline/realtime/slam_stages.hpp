@@ -68,7 +68,8 @@ class SlamStages {
   const MapStage* mapStage() const { return map_stage_.get(); }
   // stats.json's "loop" object (empty without loop closing).
   std::string loopJson() const;
-  // Warnings met while starting threads (scheduling not permitted), for the log.
+  // Warnings met while starting threads (scheduling not permitted) and the source's (a camera
+  // reconnected or frozen), for the log.
   std::string takeWarnings();
 
  private:

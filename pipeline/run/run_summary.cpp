@@ -97,6 +97,11 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
         .add("ekf_median_ms", times.median("ekf"), 3);
   }
   if (s.source_frames_skipped > 0) j.add("source_skipped_frames", s.source_frames_skipped_detail);
+  if (!s.source_counters.empty()) {
+    JsonObject c;
+    for (const auto& [name, value] : s.source_counters) c.add(name, value);
+    j.addRaw("source_counters", c.str());
+  }
   j.addRaw("stage_ms", times.json());
   JsonObject p;
   p.add("threaded", !cfg.pipeline.runner.sequential)

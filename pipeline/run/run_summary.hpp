@@ -28,6 +28,8 @@ struct RunSummary {
   // Frames of the recording the source left out (kitti: one side missing) and their names.
   int source_frames_skipped = 0;
   std::string source_frames_skipped_detail;
+  // The source's own counters (StereoSource::counters(): live cameras), in its order.
+  std::vector<std::pair<std::string, std::int64_t>> source_counters;
   // LCM commands received (accepted, refused by reason); empty when LCM is off.
   std::optional<drivers::CommandCounts> lcm_commands;
 

@@ -6,9 +6,11 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <opencv2/imgcodecs.hpp>
+#include <thread>
 
 namespace svslam::drivers::testing {
 namespace {
@@ -50,11 +52,34 @@ FakeV4l2Device::Camera* FakeV4l2Device::cameraOf(int fd) {
   return it == fds_.end() ? nullptr : &cams_.at(it->second);
 }
 
+void FakeV4l2Device::unplug(const std::string& path) {
+  Camera& cam = cams_.at(path);
+  cam.unplugged = true;
+  cam.streaming = false;
+  cam.failed_opens = 0;
+}
+
+void FakeV4l2Device::plug(const std::string& path) {
+  Camera& cam = cams_.at(path);
+  cam.unplugged = false;
+  cam.streaming = false;
+  cam.queue.clear();
+}
+
 int FakeV4l2Device::open(const std::string& path, int flags) {
   (void)flags;
   auto it = cams_.find(path);
   if (it == cams_.end()) return fail(ENOENT);
-  if (it->second.unplugged) return fail(ENODEV);
+  Camera& cam = it->second;
+  ++cam.opens;
+  if (cam.unplugged) {
+    const int back_after = cam.config.replug_after_opens;
+    if (back_after < 0 || cam.failed_opens < back_after) {
+      ++cam.failed_opens;
+      return fail(cam.config.absent_errno);
+    }
+    plug(path);
+  }
   const int fd = next_fd_++;
   fds_[fd] = path;
   return fd;
@@ -74,7 +99,9 @@ void FakeV4l2Device::fill(Camera& cam, std::uint32_t index, std::uint32_t sequen
   const ImageU8& base = cam.config.bases.empty()
                             ? cam.config.base
                             : cam.config.bases[sequence % cam.config.bases.size()];
-  const ImageU8 frame = expectedFrame(base, sequence);
+  const std::int64_t freeze = cam.config.freeze_from_sequence;
+  const ImageU8 frame = expectedFrame(
+      base, freeze >= 0 && sequence >= freeze ? static_cast<std::uint32_t>(freeze) : sequence);
   std::vector<std::uint8_t>& buf = cam.buffers[index];
   const int w = static_cast<int>(cam.width), h = static_cast<int>(cam.height);
   std::fill(buf.begin(), buf.end(), std::uint8_t{0xEE});  // padding shows up if misread
@@ -120,6 +147,8 @@ int FakeV4l2Device::dqbuf(Camera& cam, void* arg) {
       return fail(EAGAIN);
     case FakeEvent::Kind::kEnodev:
       cam.unplugged = true;
+      cam.streaming = false;
+      cam.failed_opens = 0;
       return fail(ENODEV);
     default:
       break;
@@ -261,6 +290,7 @@ int FakeV4l2Device::munmap(void* addr, std::size_t length) {
 
 int FakeV4l2Device::poll(struct pollfd* fds, nfds_t nfds, int timeout_ms) {
   (void)timeout_ms;
+  if (poll_sleep_us_ > 0) std::this_thread::sleep_for(std::chrono::microseconds(poll_sleep_us_));
   int ready = 0;
   for (nfds_t i = 0; i < nfds; ++i) {
     fds[i].revents = 0;

@@ -9,10 +9,14 @@
 //   eagain()          poll ready; DQBUF fails with EAGAIN
 //   eio()             poll ready; DQBUF dequeues the oldest buffer and fails with EIO
 //   errorFlag(t, s)   poll ready; DQBUF returns a buffer flagged V4L2_BUF_FLAG_ERROR
-//   enodev()          poll reports POLLERR; DQBUF and everything after fail with ENODEV
+//   enodev()          the camera is unplugged: poll reports POLLERR; DQBUF and every ioctl
+//                     after fail with ENODEV; open() fails with absent_errno
 //   timeout()         poll returns 0 once
 // An empty script behaves like timeout(). DQBUF with no queued buffer fails with EINVAL and
 // counts starved() (the capture forgot to requeue). Several fds, one stream per camera.
+// Plugging back: after replug_after_opens failed open() calls of an unplugged camera the next
+// open() finds it back (the script goes on); plug() does it at once, unplug() like enodev().
+#include <cerrno>
 #include <cstdint>
 #include <deque>
 #include <map>
@@ -50,6 +54,9 @@ struct FakeCameraConfig {
   std::uint32_t capabilities = 0;    // 0 = VIDEO_CAPTURE | STREAMING
   std::uint32_t max_buffers = 8;     // REQBUFS grants min(asked, this)
   bool monotonic = true;             // V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC on buffers
+  int replug_after_opens = -1;       // failed opens while unplugged before it is back; -1 never
+  int absent_errno = ENOENT;         // open() of an unplugged camera (the node is gone)
+  std::int64_t freeze_from_sequence = -1;  // >= 0: frames from this sequence on show its image
   std::deque<FakeEvent> script;
 };
 
@@ -76,6 +83,13 @@ class FakeV4l2Device final : public V4l2Device {
   int starved() const { return starved_; }
   bool streaming(const std::string& path) const { return cams_.at(path).streaming; }
   int dequeued(const std::string& path) const { return cams_.at(path).dequeued; }
+  // open() calls for `path`, successful or not.
+  int opens(const std::string& path) const { return cams_.at(path).opens; }
+  bool unplugged(const std::string& path) const { return cams_.at(path).unplugged; }
+  void unplug(const std::string& path);
+  void plug(const std::string& path);
+  // Every poll() sleeps this long first (a driver whose buffers take time), us.
+  void setPollSleepUs(int us) { poll_sleep_us_ = us; }
   int queued(const std::string& path) const { return cams_.at(path).queued_total; }
 
  private:
@@ -86,6 +100,8 @@ class FakeV4l2Device final : public V4l2Device {
     std::deque<std::uint32_t> queue;  // buffer indices owned by the driver, oldest first
     bool streaming = false;
     bool unplugged = false;
+    int failed_opens = 0;  // since the unplug
+    int opens = 0;
     int dequeued = 0;
     int queued_total = 0;
   };
@@ -98,6 +114,7 @@ class FakeV4l2Device final : public V4l2Device {
   int next_fd_ = 100;
   int mapped_ = 0;
   int starved_ = 0;
+  int poll_sleep_us_ = 0;
 };
 
 }  // namespace svslam::drivers::testing

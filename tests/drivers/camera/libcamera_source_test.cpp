@@ -40,6 +40,18 @@ TEST(LibcameraSource, BadSpecsAreRejectedBeforeTouchingCameras) {
   auto size = openStereoSource("libcamera:a,b?width=abc");
   ASSERT_FALSE(size);
   EXPECT_EQ(size.status().code(), StatusCode::kInvalidArgument);
+  auto frozen = openStereoSource("libcamera:a,b?frozen_frames=1");
+  ASSERT_FALSE(frozen);
+  EXPECT_EQ(frozen.status().message(),
+            "libcamera: option frozen_frames must be 0 (off) or in [2, 1000000], got 1");
+  auto action = openStereoSource("libcamera:a,b?frozen_action=ignore");
+  ASSERT_FALSE(action);
+  EXPECT_EQ(action.status().message(),
+            "libcamera: option frozen_action must be 'error' or 'warn', got 'ignore'");
+  // Valid fault options pass the spec check and fail only on the missing cameras.
+  auto ok = openStereoSource("libcamera:a,b?frozen_frames=0&frozen_action=warn");
+  ASSERT_FALSE(ok);
+  EXPECT_EQ(ok.status().code(), StatusCode::kNotFound) << ok.status().message();
 }
 
 }  // namespace

@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 #include <linux/videodev2.h>
 
+#include <cerrno>
 #include <cstdlib>
+#include <utility>
 
 #include "fake_v4l2_device.hpp"
 
@@ -46,13 +48,18 @@ std::deque<FakeEvent> frames(int n, std::uint32_t first_seq = 0) {
 
 // One fake camera playing `script` on kDev, a capture opened on it, and the outputs of grab.
 struct OpenCapture {
-  explicit OpenCapture(std::deque<FakeEvent> script) {
+  explicit OpenCapture(std::deque<FakeEvent> script, int max_bad_buffers = -1)
+      : cap(dev, [&] {
+          V4l2CaptureParams p = params();
+          if (max_bad_buffers >= 0) p.max_bad_buffers = max_bad_buffers;
+          return p;
+        }()) {
     dev.addCamera(kDev, camera(std::move(script)));
     opened = cap.open();
   }
   Result<bool> grab() { return cap.grab(img, t, seq); }
   FakeV4l2Device dev;
-  V4l2Capture cap{dev, params()};
+  V4l2Capture cap;
   Status opened;
   ImageU8 img;
   TimeNs t = 0;
@@ -134,7 +141,8 @@ TEST(V4l2Capture, RecoversFromEagainAndDropsErroredBuffers) {
 
 TEST(V4l2Capture, TooManyBadBuffersInARowIsAnError) {
   OpenCapture c({FakeEvent::eio(), FakeEvent::errorFlag(1, 0), FakeEvent::eio(), FakeEvent::eio(),
-                 FakeEvent::frame(10, 1)});
+                 FakeEvent::frame(10, 1)},
+                3);
   ASSERT_TRUE(c.opened);
   auto r = c.grab();
   ASSERT_FALSE(r);
@@ -146,6 +154,79 @@ TEST(V4l2Capture, TooManyBadBuffersInARowIsAnError) {
   EXPECT_EQ(c.seq, 1u);
 }
 
+// A burst of K EIO dequeues between frames 0..2 and 3..5: every frame comes through in order,
+// exactly K buffers are dropped and requeued, for K up to the limit max_bad_buffers.
+class EioBurst : public ::testing::TestWithParam<int> {};
+
+TEST_P(EioBurst, FramesAfterTheBurstComeThroughAndDropsAreCountedExactly) {
+  const int k = GetParam();
+  std::deque<FakeEvent> script = frames(3);
+  for (int i = 0; i < k; ++i) script.push_back(FakeEvent::eio());
+  for (const FakeEvent& f : frames(3, 3))
+    script.push_back(FakeEvent::frame(f.t_ns + kNsPerS, f.sequence));
+  OpenCapture c(std::move(script), 100);
+  ASSERT_TRUE(c.opened);
+  std::vector<std::uint32_t> got;
+  for (int i = 0; i < 6; ++i) {
+    auto r = c.grab();
+    ASSERT_TRUE(r) << "K " << k << ": " << r.status().message();
+    ASSERT_TRUE(*r);
+    got.push_back(c.seq);
+    EXPECT_EQ(c.img.width(), kW);
+  }
+  EXPECT_EQ(got, (std::vector<std::uint32_t>{0, 1, 2, 3, 4, 5}));
+  EXPECT_EQ(c.cap.stats().dropped, static_cast<std::uint64_t>(k));
+  EXPECT_EQ(c.cap.stats().frames, 6u);
+  EXPECT_EQ(c.cap.stats().retries, 0u);
+  EXPECT_EQ(c.dev.starved(), 0);  // every EIO buffer went back to the driver
+  EXPECT_EQ(c.dev.dequeued(kDev), 6 + k);
+  EXPECT_EQ(c.dev.queued(kDev), 3 + 6 + k);
+}
+
+INSTANTIATE_TEST_SUITE_P(K, EioBurst, ::testing::Values(1, 10, 100));
+
+TEST(V4l2Capture, EioBurstLongerThanTheLimitIsAnErrorNamingTheDevice) {
+  for (const auto& [limit, burst] : {std::pair{100, 101}, std::pair{30, 31}, std::pair{3, 4}}) {
+    std::deque<FakeEvent> script = frames(1);
+    for (int i = 0; i < burst + 5; ++i) script.push_back(FakeEvent::eio());
+    script.push_back(FakeEvent::frame(9 * kNsPerS, 50));
+    OpenCapture c(std::move(script), limit == 30 ? -1 : limit);  // 30: the default
+    ASSERT_TRUE(c.opened);
+    ASSERT_TRUE(c.grab());
+    auto r = c.grab();
+    ASSERT_FALSE(r) << "limit " << limit;
+    EXPECT_EQ(r.status().message(), "/dev/video0: " + std::to_string(burst) +
+                                        " bad buffers in a row (last: VIDIOC_DQBUF: EIO)");
+    EXPECT_EQ(c.cap.stats().dropped, static_cast<std::uint64_t>(burst));
+    EXPECT_EQ(c.dev.starved(), 0);
+  }
+}
+
+TEST(V4l2Capture, EndlessBadBuffersEndAtTimeoutMs) {
+  // A driver returning an errored buffer every >= 1 ms, limit not reached: the call gives up
+  // after timeout_ms (20 ms) with the count of bad buffers, instead of looping on.
+  FakeV4l2Device dev;
+  std::deque<FakeEvent> script;
+  for (int i = 0; i < 5000; ++i) script.push_back(FakeEvent::eio());
+  dev.addCamera(kDev, camera(std::move(script)));
+  dev.setPollSleepUs(1000);
+  V4l2CaptureParams p = params();
+  p.max_bad_buffers = 10000;
+  p.timeout_ms = 20;
+  V4l2Capture cap(dev, p);
+  ASSERT_TRUE(cap.open());
+  ImageU8 img;
+  TimeNs t = 0;
+  std::uint32_t seq = 0;
+  auto r = cap.grab(img, t, seq);
+  ASSERT_FALSE(r);
+  const std::uint64_t bad = cap.stats().dropped;
+  EXPECT_GE(bad, 1u);
+  EXPECT_LE(bad, 21u);  // each poll sleeps >= 1 ms: at most 21 polls fit in 20 ms
+  EXPECT_EQ(r.status().message(), "timeout: no frame from /dev/video0 within 20 ms (" +
+                                      std::to_string(bad) + " bad buffers)");
+}
+
 TEST(V4l2Capture, UnplugIsACleanError) {
   OpenCapture c({FakeEvent::frame(10, 0), FakeEvent::enodev()});
   ASSERT_TRUE(c.opened);
@@ -153,12 +234,37 @@ TEST(V4l2Capture, UnplugIsACleanError) {
   auto r = c.grab();
   ASSERT_FALSE(r);
   EXPECT_EQ(r.status().message(), "device unplugged: /dev/video0");
+  EXPECT_TRUE(c.cap.unplugged());
   auto after = c.grab();  // no longer streaming
   ASSERT_TRUE(after);
   EXPECT_FALSE(*after);
   EXPECT_TRUE(c.cap.stop());
   EXPECT_EQ(c.dev.openFds(), 0);
   EXPECT_EQ(c.dev.mappedBuffers(), 0);
+}
+
+TEST(V4l2Capture, ReopensAfterTheDeviceIsBack) {
+  OpenCapture c({FakeEvent::frame(10'000, 0), FakeEvent::enodev(), FakeEvent::frame(20'000, 0)});
+  c.dev.camera(kDev).replug_after_opens = 2;
+  ASSERT_TRUE(c.opened);
+  ASSERT_TRUE(c.grab());
+  ASSERT_FALSE(c.grab());
+  ASSERT_TRUE(c.cap.stop());
+  const Status gone1 = c.cap.open();
+  EXPECT_EQ(gone1.code(), StatusCode::kNotFound);
+  EXPECT_EQ(gone1.message(), "no such video device: /dev/video0");
+  c.dev.camera(kDev).absent_errno = ENODEV;
+  EXPECT_EQ(c.cap.open().message(), "cannot open /dev/video0: No such device");
+  EXPECT_EQ(c.dev.openFds(), 0);
+  ASSERT_TRUE(c.cap.open());  // third attempt: back
+  EXPECT_FALSE(c.cap.unplugged());
+  auto r = c.grab();
+  ASSERT_TRUE(r) << r.status().message();
+  ASSERT_TRUE(*r);
+  EXPECT_EQ(c.t, 20'000);  // us resolution (timeval)
+  EXPECT_EQ(c.cap.stats().frames, 2u);
+  EXPECT_EQ(c.dev.opens(kDev), 4);
+  EXPECT_EQ(c.dev.starved(), 0);
 }
 
 TEST(V4l2Capture, TimeoutNamesTheDevice) {
@@ -224,7 +330,9 @@ TEST(V4l2Capture, BadParamsAreRejected) {
   EXPECT_FALSE(bad([](V4l2CaptureParams& p) { p.format = "RGB24"; }));
   EXPECT_FALSE(bad([](V4l2CaptureParams& p) { p.buffers = 1; }));
   EXPECT_FALSE(bad([](V4l2CaptureParams& p) { p.timeout_ms = 0; }));
-  EXPECT_FALSE(bad([](V4l2CaptureParams& p) { p.max_retries = -1; }));
+  EXPECT_FALSE(bad([](V4l2CaptureParams& p) { p.max_bad_buffers = -1; }));
+  EXPECT_FALSE(bad([](V4l2CaptureParams& p) { p.max_bad_buffers = 10001; }));
+  EXPECT_EQ(V4l2CaptureParams().max_bad_buffers, 30);
   FakeV4l2Device dev;
   V4l2CaptureParams p = params();
   p.buffers = 0;

@@ -1,12 +1,16 @@
 // v4l2: stereo source on the fake driver: timestamp pairing with skew, side-by-side split,
-// rectification from a calibration file written here, spec and calibration errors.
+// rectification from a calibration file written here, spec and calibration errors; injected
+// faults: unplug and plug back (reconnect), never back, reconnect off, stop while waiting, a
+// frozen camera.
 #include "drivers/camera/v4l2_source.hpp"
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <opencv2/core.hpp>
 
 #include "fake_v4l2_device.hpp"
@@ -158,6 +162,339 @@ TEST(V4l2Source, SpecErrors) {
   EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
   auto layout = openV4l2Source("/dev/video0?layout=top-bottom&calib=" + calib, dev);
   EXPECT_NE(layout.status().message().find("top-bottom"), std::string::npos);
+}
+
+// Virtual time for the reconnect loop: waits advance it at once and are recorded.
+class VirtualClock final : public ReconnectClock {
+ public:
+  TimeNs nowNs() override { return now; }
+  bool waitNs(TimeNs ns, const StopQuery& stop) override {
+    if (stop && stop()) return true;
+    waits.push_back(ns);
+    now += ns;
+    if (on_wait) on_wait();
+    return false;
+  }
+  TimeNs now = 1000 * kNsPerS;
+  std::vector<TimeNs> waits;
+  std::function<void()> on_wait;
+};
+
+constexpr TimeNs kP = 33'333'333;  // frame period at 30 Hz, ns
+
+// Frames `first` .. `last` (inclusive) at 1 s + i kP, sequence i.
+std::deque<FakeEvent> framesAt(int first, int last) {
+  std::deque<FakeEvent> s;
+  for (int i = first; i <= last; ++i)
+    s.push_back(FakeEvent::frame(kNsPerS + i * kP, static_cast<std::uint32_t>(i)));
+  return s;
+}
+
+std::deque<FakeEvent> concat(std::deque<FakeEvent> a, const std::deque<FakeEvent>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+std::map<std::string, std::int64_t> counterMap(const StereoSource& src) {
+  std::map<std::string, std::int64_t> m;
+  for (const auto& [k, v] : src.counters()) m[k] = v;
+  return m;
+}
+
+const std::string kPair = "/dev/video0,/dev/video1?width=80&height=60&calib=";
+
+TEST(V4l2Source, UnpluggedCameraReconnectsAndFramesLostAreCounted) {
+  FakeV4l2Device dev;
+  // Frames 0..2, the left camera unplugged, both streaming again from frame 10 on.
+  dev.addCamera(
+      "/dev/video0",
+      camera(kW, 0, concat(concat(framesAt(0, 2), {FakeEvent::enodev()}), framesAt(10, 12))));
+  dev.addCamera("/dev/video1", camera(kW, 1, concat(framesAt(0, 2), framesAt(10, 12))));
+  dev.camera("/dev/video0").replug_after_opens = 3;  // back at the 4th attempt
+  VirtualClock clock;
+  auto src = openV4l2Source(
+      kPair + writeCalib("reconnect", kW, kH) + "&reconnect_timeout_s=5&reconnect_interval_ms=100",
+      dev, {}, &clock);
+  ASSERT_TRUE(src) << src.status().message();
+  StereoFrame f;
+  std::vector<TimeNs> t;
+  for (int i = 0; i < 6; ++i) {
+    auto r = (*src)->next(f);
+    ASSERT_TRUE(r) << "pair " << i << ": " << r.status().message();
+    ASSERT_TRUE(*r);
+    EXPECT_EQ(f.index, i);
+    t.push_back(f.t_ns);
+  }
+  EXPECT_EQ(
+      t, (std::vector<TimeNs>{kNsPerS / 1000 * 1000, kNsPerS + kP / 1000 * 1000,
+                              kNsPerS + 2 * kP / 1000 * 1000, kNsPerS + 10 * kP / 1000 * 1000,
+                              kNsPerS + 11 * kP / 1000 * 1000, kNsPerS + 12 * kP / 1000 * 1000}));
+  // Left frame 10 after the reconnect is the camera's live image again.
+  EXPECT_LE(maxInteriorDiff(f.left, testing::expectedFrame(dev.camera("/dev/video0").base, 12)), 1);
+  EXPECT_EQ(clock.waits, (std::vector<TimeNs>{100 * kNsPerMs, 100 * kNsPerMs, 100 * kNsPerMs}));
+  EXPECT_EQ(dev.opens("/dev/video0"), 1 + 4);
+  EXPECT_EQ(dev.opens("/dev/video1"), 1 + 1);  // reopened once the left one was back
+  const auto c = counterMap(**src);
+  EXPECT_EQ(c.at("reconnects"), 1);
+  EXPECT_EQ(c.at("reconnect_frames_lost"), 7);  // frames 3..9
+  EXPECT_EQ(c.at("reconnect_wait_ms"), 300);
+  EXPECT_EQ(c.at("left_frames"), 6);
+  EXPECT_EQ(c.at("right_frames"), 6);
+  EXPECT_EQ(c.at("left_unpaired"), 0);
+  EXPECT_EQ(c.at("right_unpaired"), 0);
+  EXPECT_EQ((*src)->takeWarnings(),
+            "device unplugged: /dev/video0: reconnecting (every 100 ms for up to 5 s)\n"
+            "reconnected /dev/video0,/dev/video1 after 300 ms\n");
+  EXPECT_EQ((*src)->takeWarnings(), "");
+  EXPECT_EQ(dev.starved(), 0);
+  src->reset();
+  EXPECT_EQ(dev.openFds(), 0);
+  EXPECT_EQ(dev.mappedBuffers(), 0);
+}
+
+TEST(V4l2Source, RightCameraAndSideBySideDeviceReconnectToo) {
+  {
+    FakeV4l2Device dev;
+    dev.addCamera("/dev/video0", camera(kW, 0, concat(framesAt(0, 1), framesAt(5, 5))));
+    dev.addCamera(
+        "/dev/video1",
+        camera(kW, 1, concat(concat(framesAt(0, 0), {FakeEvent::enodev()}), framesAt(5, 5))));
+    dev.camera("/dev/video1").replug_after_opens = 1;
+    dev.camera("/dev/video1").absent_errno = ENODEV;  // node still there, device gone
+    VirtualClock clock;
+    auto src = openV4l2Source(kPair + writeCalib("reconnect_r", kW, kH), dev, {}, &clock);
+    ASSERT_TRUE(src) << src.status().message();
+    StereoFrame f;
+    for (int i = 0; i < 2; ++i) {
+      auto r = (*src)->next(f);
+      ASSERT_TRUE(r) << r.status().message();
+    }
+    EXPECT_EQ(f.t_ns, (kNsPerS + 5 * kP) / 1000 * 1000);
+    const auto c = counterMap(**src);
+    EXPECT_EQ(c.at("reconnects"), 1);
+    EXPECT_EQ(c.at("reconnect_frames_lost"), 4);
+    // The left head (frame 1) waiting for its partner was dropped with the restart.
+    EXPECT_EQ(c.at("left_unpaired"), 0);
+    EXPECT_EQ(clock.waits, (std::vector<TimeNs>{200 * kNsPerMs}));  // default interval
+  }
+  {
+    FakeV4l2Device dev;
+    dev.addCamera(
+        "/dev/video2",
+        camera(2 * kW, 3, concat(concat(framesAt(0, 0), {FakeEvent::enodev()}), framesAt(2, 2))));
+    dev.camera("/dev/video2").replug_after_opens = 0;  // back at the first attempt
+    VirtualClock clock;
+    auto src = openV4l2Source("/dev/video2?layout=side-by-side&width=160&height=60&calib=" +
+                                  writeCalib("reconnect_sbs", kW, kH),
+                              dev, {}, &clock);
+    ASSERT_TRUE(src) << src.status().message();
+    StereoFrame f;
+    ASSERT_TRUE((*src)->next(f));
+    auto r = (*src)->next(f);
+    ASSERT_TRUE(r) << r.status().message();
+    EXPECT_EQ(f.index, 1);
+    const auto c = counterMap(**src);
+    EXPECT_EQ(c.at("reconnects"), 1);
+    EXPECT_EQ(c.at("reconnect_frames_lost"), 1);
+    EXPECT_EQ(c.at("reconnect_wait_ms"), 0);
+    EXPECT_EQ(c.at("sbs_frames"), 2);
+    EXPECT_TRUE(clock.waits.empty());
+  }
+}
+
+TEST(V4l2Source, UnpluggedCameraNeverBackIsAnErrorAtTheTimeout) {
+  FakeV4l2Device dev;
+  dev.addCamera("/dev/video0", camera(kW, 0, concat(framesAt(0, 0), {FakeEvent::enodev()})));
+  dev.addCamera("/dev/video1", camera(kW, 1, framesAt(0, 5)));
+  VirtualClock clock;
+  const TimeNs start = clock.now;
+  auto src = openV4l2Source(
+      kPair + writeCalib("never", kW, kH) + "&reconnect_timeout_s=1&reconnect_interval_ms=100", dev,
+      {}, &clock);
+  ASSERT_TRUE(src) << src.status().message();
+  StereoFrame f;
+  ASSERT_TRUE((*src)->next(f));
+  auto r = (*src)->next(f);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.status().message(),
+            "device unplugged: /dev/video0 (not back within 1 s, 11 attempts; last: no such "
+            "video device: /dev/video0)");
+  EXPECT_EQ(clock.now - start, kNsPerS);  // attempts at 0, 100, ..., 1000 ms
+  EXPECT_EQ(clock.waits.size(), 10u);
+  EXPECT_EQ(dev.opens("/dev/video0"), 1 + 11);
+  EXPECT_EQ(counterMap(**src).at("reconnect_wait_ms"), 1000);
+  EXPECT_EQ(dev.openFds(), 0);  // everything released
+  EXPECT_EQ(dev.mappedBuffers(), 0);
+  auto after = (*src)->next(f);  // the stream has ended
+  ASSERT_TRUE(after);
+  EXPECT_FALSE(*after);
+}
+
+TEST(V4l2Source, NeverBackOnTheRealClockEndsWithinTheTimeoutWithoutSpinning) {
+  FakeV4l2Device dev;
+  dev.addCamera("/dev/video0", camera(kW, 0, concat(framesAt(0, 0), {FakeEvent::enodev()})));
+  dev.addCamera("/dev/video1", camera(kW, 1, framesAt(0, 5)));
+  auto src = openV4l2Source(kPair + writeCalib("never_real", kW, kH) +
+                                "&reconnect_timeout_s=0.2&reconnect_interval_ms=20",
+                            dev);
+  ASSERT_TRUE(src) << src.status().message();
+  StereoFrame f;
+  ASSERT_TRUE((*src)->next(f));
+  const auto t0 = std::chrono::steady_clock::now();
+  auto r = (*src)->next(f);
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.status().message().rfind("device unplugged: /dev/video0 (not back within 0.2 s, ", 0),
+            0u)
+      << r.status().message();
+  EXPECT_GE(s, 0.2);
+  EXPECT_LT(s, 5.0);  // generous: a loaded 2-core machine
+  EXPECT_GE(dev.opens("/dev/video0"), 1 + 2);
+  EXPECT_LE(dev.opens("/dev/video0"), 1 + 11);  // one attempt per interval, no busy loop
+}
+
+TEST(V4l2Source, ReconnectOffIsAnImmediateCleanError) {
+  FakeV4l2Device dev;
+  dev.addCamera("/dev/video0", camera(kW, 0, concat(framesAt(0, 0), {FakeEvent::enodev()})));
+  dev.addCamera("/dev/video1", camera(kW, 1, framesAt(0, 5)));
+  dev.camera("/dev/video0").replug_after_opens = 0;  // would be back at once: not tried
+  VirtualClock clock;
+  auto src =
+      openV4l2Source(kPair + writeCalib("off", kW, kH) + "&reconnect_timeout_s=0", dev, {}, &clock);
+  ASSERT_TRUE(src) << src.status().message();
+  StereoFrame f;
+  ASSERT_TRUE((*src)->next(f));
+  auto r = (*src)->next(f);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.status().message(), "device unplugged: /dev/video0");
+  EXPECT_EQ(dev.opens("/dev/video0"), 1);
+  EXPECT_TRUE(clock.waits.empty());
+  EXPECT_EQ(counterMap(**src).at("reconnects"), 0);
+}
+
+TEST(V4l2Source, StopRequestWhileWaitingEndsTheStream) {
+  FakeV4l2Device dev;
+  dev.addCamera("/dev/video0", camera(kW, 0, concat(framesAt(0, 0), {FakeEvent::enodev()})));
+  dev.addCamera("/dev/video1", camera(kW, 1, framesAt(0, 5)));
+  VirtualClock clock;
+  bool stop = false;
+  clock.on_wait = [&] { stop = clock.waits.size() == 3; };
+  auto src = openV4l2Source(
+      kPair + writeCalib("stop", kW, kH), dev, [&] { return stop; }, &clock);
+  ASSERT_TRUE(src) << src.status().message();
+  StereoFrame f;
+  ASSERT_TRUE((*src)->next(f));
+  auto r = (*src)->next(f);
+  ASSERT_TRUE(r) << r.status().message();
+  EXPECT_FALSE(*r);  // ended, not an error
+  EXPECT_EQ(clock.waits.size(), 3u);
+  EXPECT_EQ(dev.opens("/dev/video0"), 1 + 3);
+  EXPECT_EQ(counterMap(**src).at("reconnects"), 1);
+}
+
+TEST(V4l2Source, FrozenCameraEndsTheRunAfterExactlyNFrames) {
+  FakeV4l2Device dev;
+  dev.addCamera("/dev/video0", camera(kW, 0, framesAt(0, 40)));
+  dev.addCamera("/dev/video1", camera(kW, 1, framesAt(0, 40)));
+  dev.camera("/dev/video1").freeze_from_sequence = 5;  // the right camera shows frame 5 forever
+  auto src = openV4l2Source(kPair + writeCalib("frozen", kW, kH) + "&frozen_frames=10", dev);
+  ASSERT_TRUE(src) << src.status().message();
+  StereoFrame f;
+  for (int i = 0; i < 14; ++i) {  // pairs 5..13: 9 identical right frames, not yet frozen
+    auto r = (*src)->next(f);
+    ASSERT_TRUE(r) << "pair " << i << ": " << r.status().message();
+  }
+  auto r = (*src)->next(f);  // pair 14: the 10th identical frame
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.status().message(),
+            "camera frozen: /dev/video1 delivered the same image for 10 frames");
+  auto* v4l2 = dynamic_cast<V4l2StereoSource*>(src->get());
+  ASSERT_NE(v4l2, nullptr);
+  EXPECT_EQ(v4l2->frozenDetections(0), 0u);
+  EXPECT_EQ(v4l2->frozenDetections(1), 1u);
+}
+
+TEST(V4l2Source, FrozenCameraDefaultsTo30FramesAndWarnGoesOn) {
+  {
+    FakeV4l2Device dev;
+    dev.addCamera("/dev/video0", camera(kW, 0, framesAt(0, 40)));
+    dev.addCamera("/dev/video1", camera(kW, 1, framesAt(0, 40)));
+    dev.camera("/dev/video0").freeze_from_sequence = 0;  // same buffer from the start
+    auto src = openV4l2Source(kPair + writeCalib("frozen30", kW, kH), dev);
+    ASSERT_TRUE(src) << src.status().message();
+    StereoFrame f;
+    int delivered = 0;
+    Result<bool> r = true;
+    while ((r = (*src)->next(f)) && *r) ++delivered;
+    ASSERT_FALSE(r);
+    EXPECT_EQ(delivered, 29);
+    EXPECT_EQ(r.status().message(),
+              "camera frozen: /dev/video0 delivered the same image for 30 frames");
+  }
+  {
+    FakeV4l2Device dev;
+    dev.addCamera("/dev/video0", camera(kW, 0, framesAt(0, 40)));
+    dev.addCamera("/dev/video1", camera(kW, 1, framesAt(0, 40)));
+    dev.camera("/dev/video0").freeze_from_sequence = 20;
+    auto src = openV4l2Source(
+        kPair + writeCalib("frozen_warn", kW, kH) + "&frozen_frames=5&frozen_action=warn", dev);
+    ASSERT_TRUE(src) << src.status().message();
+    StereoFrame f;
+    for (int i = 0; i <= 40; ++i) {
+      auto r = (*src)->next(f);
+      ASSERT_TRUE(r) << r.status().message();
+      ASSERT_TRUE(*r);
+    }
+    EXPECT_EQ((*src)->takeWarnings(),
+              "camera frozen: /dev/video0 delivered the same image for 5 frames\n");
+    const auto c = counterMap(**src);
+    EXPECT_EQ(c.at("left_frozen"), 1);
+    EXPECT_EQ(c.at("right_frozen"), 0);
+    EXPECT_EQ(c.at("left_max_identical_run"), 21);  // frames 20..40
+    EXPECT_EQ(c.at("right_max_identical_run"), 1);
+  }
+  {  // off: a frozen camera goes unnoticed
+    FakeV4l2Device dev;
+    dev.addCamera("/dev/video0", camera(kW, 0, framesAt(0, 40)));
+    dev.addCamera("/dev/video1", camera(kW, 1, framesAt(0, 40)));
+    dev.camera("/dev/video0").freeze_from_sequence = 0;
+    auto src = openV4l2Source(kPair + writeCalib("frozen_off", kW, kH) + "&frozen_frames=0", dev);
+    ASSERT_TRUE(src) << src.status().message();
+    StereoFrame f;
+    for (int i = 0; i <= 40; ++i) ASSERT_TRUE((*src)->next(f));
+    EXPECT_EQ(counterMap(**src).at("left_frozen"), 0);
+  }
+}
+
+TEST(V4l2Source, FaultOptionsOutOfRangeNameTheKey) {
+  FakeV4l2Device dev;
+  const std::string base = kPair + writeCalib("fault_opts", kW, kH);
+  auto msg = [&](const std::string& opt) {
+    auto r = openV4l2Source(base + "&" + opt, dev);
+    EXPECT_FALSE(r) << opt;
+    return r ? std::string() : r.status().message();
+  };
+  EXPECT_EQ(msg("reconnect_timeout_s=-1"),
+            "v4l2: option reconnect_timeout_s must be in [0, 3600] s, got -1");
+  EXPECT_EQ(msg("reconnect_timeout_s=5s"), "v4l2: option reconnect_timeout_s='5s' is not a number");
+  EXPECT_EQ(msg("reconnect_interval_ms=5"),
+            "v4l2: option reconnect_interval_ms must be in [10, 60000] ms, got 5");
+  EXPECT_EQ(msg("reconnect_interval_ms=2.5"),
+            "v4l2: option reconnect_interval_ms must be an integer");
+  EXPECT_EQ(msg("frozen_frames=1"),
+            "v4l2: option frozen_frames must be 0 (off) or in [2, 1000000], got 1");
+  EXPECT_EQ(msg("frozen_action=stop"),
+            "v4l2: option frozen_action must be 'error' or 'warn', got 'stop'");
+  EXPECT_EQ(msg("max_bad_buffers=10001"),
+            "v4l2: option max_bad_buffers must be in [0, 10000], got 10001");
+  EXPECT_EQ(dev.openFds(), 0);
+  auto setup = parseV4l2Setup("/dev/video0,/dev/video1");
+  ASSERT_TRUE(setup);
+  EXPECT_EQ(setup->reconnect.timeout_s, 5.0);
+  EXPECT_EQ(setup->reconnect.interval_ms, 200);
+  EXPECT_EQ(setup->frozen.detector.frozen_frames, 30);
+  EXPECT_TRUE(setup->frozen.end_run);
+  EXPECT_EQ(setup->params.max_bad_buffers, 30);
 }
 
 TEST(V4l2Source, PairingGivesUpWhenCamerasNeverAgree) {
