@@ -4,6 +4,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include "pipeline/realtime/stage_health.hpp"
 #include "pipeline/service/scheduling.hpp"
 #include "pipeline/thread_pool_executor.hpp"
 
@@ -155,7 +156,12 @@ Status SlamStages::stereo(FrameSlot& slot) {
   if (stereo_stage_->needsFeedback() && last_stereo_seq_ >= 0) {
     const std::int64_t w0 = steadyNowNs();
     // Closed: the estimator failed (its error, written before the close, is the run's error).
-    if (!feedback_.wait(last_stereo_seq_, fb)) return estimator_error_;
+    bool got = false;
+    {
+      StageWait waiting;  // on the estimator: not this stage's stall
+      got = feedback_.wait(last_stereo_seq_, fb);
+    }
+    if (!got) return estimator_error_;
     stereo_times_.add("wait_estimator", static_cast<double>(steadyNowNs() - w0) * 1e-6);
     stereo_clock_->start();
   }

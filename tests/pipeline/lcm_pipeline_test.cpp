@@ -273,6 +273,85 @@ TEST(LcmPipeline, CommandsAreAppliedAndAnswered) {
   runInNamespace("CommandsAreAppliedAndAnswered");
 }
 
+// Collects the stats_t reports.
+struct StatsSink {
+  std::mutex mu;
+  std::vector<StatsReport> got;
+  LcmLink::RawHandler handler() {
+    return [this](const std::uint8_t* data, std::size_t size) {
+      svslam_lcm::stats_t m;
+      if (!decodeLcm(data, size, m)) return;
+      auto r = fromLcm(m);
+      if (!r) return;
+      std::lock_guard<std::mutex> lock(mu);
+      got.push_back(*r);
+    };
+  }
+};
+
+// The estimator sleeps 2.5 s once (pipeline.fault), stall timeout 1 s: while it is stalled no
+// pose is published, yet stats_t keep coming every stats_period_s (sent by the health check) and
+// name it; the last ones count the stall.
+TEST(LcmPipeline, InnerStalledStageIsOnTheStatsChannel) {
+  if (!inner("StalledStageIsOnTheStatsChannel"))
+    GTEST_SKIP() << "runs inside the namespace of StalledStageIsOnTheStatsChannel";
+  const fs::path dir =
+      fs::temp_directory_path() / ("svslam_lcmstall_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path cfg = dir / "stall.yaml";
+  std::ofstream(cfg) << "service: {stall_timeout_s: 1.0}\n"
+                        "lcm: {stats_period_s: 0.25}\n"
+                        "pipeline:\n  fault: {stall_stage: estimator, stall_frame: 20, "
+                        "stall_ms: 2500}\n";
+  LcmParams p;
+  p.url = kUrl;
+  auto link = LcmLink::open(p);
+  ASSERT_TRUE(link.isOk()) << link.status().message();
+  StatsSink sink;
+  ASSERT_TRUE((*link)->subscribeRaw(p.stats_channel, sink.handler()).isOk());
+  std::atomic<bool> stop{false};
+  std::thread rx([&] {
+    while (!stop.load()) (void)(*link)->handle(50);
+  });
+  const int rc = std::system((std::string(SVSLAM_CLI) + " run --config " + cfg.string() +
+                              " --source synthetic:width=320,height=240,frames=80 --rate 20"
+                              " --lcm-url '" +
+                              kUrl + "' --out " + (dir / "out").string() + " > " +
+                              (dir / "run_out.txt").string() + " 2>&1")
+                                 .c_str());
+  std::this_thread::sleep_for(300ms);
+  stop = true;
+  rx.join();
+  ASSERT_EQ(WEXITSTATUS(rc), 0) << slurp(dir / "run_out.txt");
+  std::lock_guard<std::mutex> lock(sink.mu);
+  int naming = 0;
+  std::int64_t frames_out_during = -1;
+  bool same_frames_out = true;
+  for (const StatsReport& r : sink.got) {
+    if (r.stalled_stage.empty()) continue;
+    EXPECT_EQ(r.stalled_stage, "estimator");
+    EXPECT_GT(r.stalled_ms, 1000.0);
+    ++naming;
+    if (frames_out_during >= 0 && r.frames_out != frames_out_during) same_frames_out = false;
+    frames_out_during = r.frames_out;
+  }
+  // Visible for about 1.5 s at one report per 0.25 s.
+  EXPECT_GE(naming, 3) << sink.got.size() << " stats received\n" << slurp(dir / "run_out.txt");
+  EXPECT_TRUE(same_frames_out);  // no pose during the stall
+  ASSERT_FALSE(sink.got.empty());
+  const StatsReport& last = sink.got.back();
+  EXPECT_EQ(last.stalled_stage, "");
+  ASSERT_EQ(last.stalls.size(), 1u);
+  EXPECT_EQ(last.stalls[0].stage, "estimator");
+  EXPECT_EQ(last.stalls[0].count, 1);
+  EXPECT_GE(last.stalls[0].longest_ms, 2500.0);
+  fs::remove_all(dir);
+}
+
+TEST(LcmPipeline, StalledStageIsOnTheStatsChannel) {
+  runInNamespace("StalledStageIsOnTheStatsChannel");
+}
+
 // Sends `c` every 100 ms for `period` (no answer expected).
 void sendFor(LcmLink& link, const Command& c, std::chrono::milliseconds period) {
   const auto t0 = std::chrono::steady_clock::now();
