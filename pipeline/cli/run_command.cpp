@@ -431,7 +431,9 @@ int runPipeline(const std::vector<std::string>& args) {
   if (!stopping_sent) notifier.stopping();
 
   std::string error = run_status ? "" : run_status.message();
-  if (Status s = work.finish(); !s && error.empty()) error = s.message();
+  // The files written at the end (on a full disk they fail after the first error, too).
+  if (Status s = work.finish(); !s)
+    error = error.empty() ? s.message() : error + "; then " + s.message();
   const run::StageTimes times = work.stageTimes();
   const rt::PipelineReport& rep = runner.report();
   run::RunSummary summary = work.summary();
@@ -441,13 +443,14 @@ int runPipeline(const std::vector<std::string>& args) {
     refused_log.update(*lcm, rt::steadyNowNs(), true);
     summary.lcm_commands = lcm->commandCounts();
   }
+  // The first error is the one reported; stats.json not written (a full disk) comes after it.
   if (Status s =
           run::writeFileAtomic(out_dir + "/" + run::files::kStats,
                                run::statsJson(cfg, source_spec, summary, work.outputs(), times, rep,
                                               error, work.mapJson(rep.after_publish_skipped),
                                               work.loopJson()));
       !s)
-    return fail(s);
+    error = error.empty() ? s.message() : error + "; then " + s.message();
   if (!error.empty()) return fail(Status::ioError(error));
   JsonObject j;
   j.add("source", source_spec)

@@ -239,8 +239,7 @@ Status LoopStage::finish() {
     }
     if (Status s = w.append(t, T); !s) return s;
   }
-  w.close();
-  return Status::ok();
+  return w.close();
 }
 
 std::string LoopStage::json() const {

@@ -259,10 +259,11 @@ void SlamStages::publishMapSummary(TimeNs t_ns) {
 }
 
 Status SlamStages::finish() {
-  publisher_->close();
-  Status s;
-  if (estimator_ && estimator_->outputs().landmark_map)
-    s = writeMap(out_dir_ + "/" + run::files::kLandmarks);
+  Status s = publisher_->close();
+  if (estimator_ && estimator_->outputs().landmark_map) {
+    const Status ws = writeMap(out_dir_ + "/" + run::files::kLandmarks);
+    if (s) s = ws;
+  }
   if (map_stage_) {
     const Status ms = map_stage_->finish();
     if (s) s = ms;

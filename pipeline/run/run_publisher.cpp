@@ -28,11 +28,11 @@ Status RunPublisher::open(bool ground_truth) {
   return Status::ok();
 }
 
-void RunPublisher::close() {
-  traj_.close();
-  gt_.close();
-  cov_file_.close();
-  latency_file_.close();
+Status RunPublisher::close() {
+  Status first;
+  for (const Status& s : {traj_.close(), gt_.close(), cov_file_.close(), latency_file_.close()})
+    if (first && !s) first = s;
+  return first;
 }
 
 Status RunPublisher::publish(const rt::FrameSlot& slot) {

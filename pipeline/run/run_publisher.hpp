@@ -38,7 +38,8 @@ class RunPublisher {
   // lcm.stats_period_s, sends the last ones again with the frame count and the stalls of now
   // (t_ns moved on by the time since). Nothing without LCM.
   void publishStallStats();
-  void close();
+  // Closes the files; error naming the first file whose close failed.
+  Status close();
   const RunSummary& summary() const { return summary_; }
 
  private:
