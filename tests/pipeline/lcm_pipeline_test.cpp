@@ -301,7 +301,7 @@ TEST(LcmPipeline, InnerStalledStageIsOnTheStatsChannel) {
   fs::create_directories(dir);
   const fs::path cfg = dir / "stall.yaml";
   std::ofstream(cfg) << "service: {stall_timeout_s: 1.0}\n"
-                        "lcm: {stats_period_s: 0.25}\n"
+                        "lcm: {stats_period_s: 0.25}\nmap: {enabled: false}\n"
                         "pipeline:\n  fault: {stall_stage: estimator, stall_frame: 20, "
                         "stall_ms: 2500}\n";
   LcmParams p;
