@@ -251,7 +251,9 @@ int runPipeline(const std::vector<std::string>& args) {
       "An output folder used before loses the files of the earlier run that this run\n"
       "writes (trajectories, stats.json, map files...); other files stay. Under\n"
       "systemd (Type=notify): READY=1 after the first pose, WATCHDOG=1 while frames\n"
-      "complete. Prints a JSON summary.");
+      "complete and no stage works on one frame for longer than service.stall_timeout_s\n"
+      "(such a stage is named on stderr, in STATUS= and in the stats). A failed write\n"
+      "(disk full) exits 1 naming the file. Prints a JSON summary.");
   p.addOption("source", "SRC",
               "kitti:DIR, euroc:DIR, synthetic[:key=value,...], v4l2:..., libcamera:... or "
               "lcm:CHANNEL (default: the config's 'source', else synthetic)");
