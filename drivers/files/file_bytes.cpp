@@ -43,8 +43,9 @@ Status writeFileAtomically(const std::string& path, const void* data, std::size_
     return Status::ioError("cannot write " + path + ": cannot create " + tmp + ": " + why);
   }
   const bool wrote = std::fwrite(data, 1, n, f) == n && std::fflush(f) == 0;
-  const std::string why = wrote ? std::string() : std::strerror(errno);
+  std::string why = wrote ? std::string() : std::strerror(errno);
   const bool closed = std::fclose(f) == 0;
+  if (!closed && why.empty()) why = std::strerror(errno);
   if (!wrote || !closed) {
     fs::remove(tmp, ec);
     return Status::ioError("cannot write " + path + ": writing " + tmp + " failed" +

@@ -79,8 +79,10 @@ bool scan(WireWalker& w, const svslam_lcm::pose_t*) {
 }
 bool scan(WireWalker& w, const svslam_lcm::stats_t*) {
   std::int32_t ns = 0, nq = 0;
+  std::int32_t nst = 0;
   return w.skip(8 + 40) && w.count(ns, 5) && w.strs(ns) && w.skip(24 * std::size_t(ns)) &&
-         w.count(nq, 5) && w.strs(nq) && w.skip(16 * std::size_t(nq) + 24 + 48) && w.atEnd();
+         w.count(nq, 5) && w.strs(nq) && w.skip(16 * std::size_t(nq) + 24 + 48) && w.str() &&
+         w.skip(8) && w.count(nst, 5) && w.strs(nst) && w.skip(16 * std::size_t(nst)) && w.atEnd();
 }
 bool scan(WireWalker& w, const svslam_lcm::map_summary_t*) {
   std::int32_t n = 0;
@@ -235,6 +237,22 @@ Result<svslam_lcm::stats_t> toLcm(const StatsReport& r) {
   m.commands_refused_bad_token = cc.refusedBy(CommandRefusal::kBadToken);
   m.commands_refused_rate_limited = cc.refusedBy(CommandRefusal::kRateLimited);
   m.commands_malformed = cc.refusedBy(CommandRefusal::kMalformed);
+  if (!finite(r.stalled_ms) || r.stalled_ms < 0)
+    return Status::invalidArgument("stats: stalled_ms is negative, NaN or inf");
+  if (r.stalled_stage.empty() != (r.stalled_ms == 0))
+    return Status::invalidArgument("stats: a stalled stage needs stalled_ms > 0, and only it");
+  m.stalled_stage = r.stalled_stage;
+  m.stalled_ms = r.stalled_ms;
+  for (const StallReport& st : r.stalls) {
+    if (st.stage.empty()) return Status::invalidArgument("stats: stall without a stage name");
+    if (st.count < 1 || !finite(st.longest_ms) || st.longest_ms < 0)
+      return Status::invalidArgument("stats: stall count or duration of stage '" + st.stage +
+                                     "' invalid");
+    m.stall_stage.push_back(st.stage);
+    m.stall_count.push_back(st.count);
+    m.stall_longest_ms.push_back(st.longest_ms);
+  }
+  m.num_stalls = static_cast<std::int32_t>(r.stalls.size());
   return m;
 }
 
@@ -244,8 +262,12 @@ Result<StatsReport> fromLcm(const svslam_lcm::stats_t& m) {
   if (m.num_stages < 0 || m.stage_name.size() != ns || m.p50_ms.size() != ns ||
       m.p99_ms.size() != ns || m.max_ms.size() != ns || m.num_queues < 0 ||
       m.queue_name.size() != nq || m.queue_depth.size() != nq || m.queue_capacity.size() != nq ||
-      m.queue_drops.size() != nq)
-    return Status::invalidArgument("stats_t: array sizes differ from num_stages / num_queues");
+      m.queue_drops.size() != nq || m.num_stalls < 0 ||
+      m.stall_stage.size() != static_cast<std::size_t>(m.num_stalls) ||
+      m.stall_count.size() != m.stall_stage.size() ||
+      m.stall_longest_ms.size() != m.stall_stage.size())
+    return Status::invalidArgument(
+        "stats_t: array sizes differ from num_stages / num_queues / num_stalls");
   StatsReport r;
   auto t = fromUtime(m.utime);
   if (!t) return t.status();
@@ -268,6 +290,10 @@ Result<StatsReport> fromLcm(const svslam_lcm::stats_t& m) {
   set(CommandRefusal::kBadToken, m.commands_refused_bad_token);
   set(CommandRefusal::kRateLimited, m.commands_refused_rate_limited);
   set(CommandRefusal::kMalformed, m.commands_malformed);
+  r.stalled_stage = m.stalled_stage;
+  r.stalled_ms = m.stalled_ms;
+  for (std::size_t i = 0; i < m.stall_stage.size(); ++i)
+    r.stalls.push_back({m.stall_stage[i], m.stall_count[i], m.stall_longest_ms[i]});
   // Same checks as on the way out.
   if (auto back = toLcm(r); !back) return back.status();
   return r;

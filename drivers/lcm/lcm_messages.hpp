@@ -60,6 +60,13 @@ struct QueueReport {
   std::int64_t drops = 0;       // items dropped since start
 };
 
+// A stage that stalled: worked on one frame for longer than the stall timeout.
+struct StallReport {
+  std::string stage;
+  std::int64_t count = 0;  // stalls since start
+  double longest_ms = 0;   // the longest, ms
+};
+
 struct StatsReport {
   TimeNs t_ns = 0;  // time of the report
   std::int64_t frames_in = 0, frames_out = 0, frames_dropped = 0, frames_tracked = 0;
@@ -67,6 +74,9 @@ struct StatsReport {
   std::vector<QueueReport> queues;
   double e2e_p50_ms = 0, e2e_p99_ms = 0, e2e_max_ms = 0;  // capture -> publish, milliseconds
   CommandCounts commands;  // commands received since start: accepted, refused by reason
+  std::string stalled_stage;        // the stage stalled at the time of the report; "" = none
+  double stalled_ms = 0;            // how long it has been working on its frame, ms
+  std::vector<StallReport> stalls;  // the stages that stalled since start
 };
 
 struct MapSummaryReport {

@@ -55,6 +55,7 @@ Result<std::unique_ptr<LcmLink>> LcmLink::open(const LcmParams& params, CommandG
   if (link->command_sub_ == nullptr)
     return Status::ioError("LCM: cannot subscribe to '" + params.command_channel + "' on '" +
                            params.url + "'");
+  lcm_subscription_set_queue_capacity(link->command_sub_, kCommandQueueCapacity);
   return link;
 }
 
@@ -188,16 +189,14 @@ Status LcmLink::pollCommands(int timeout_ms, std::vector<Command>& out) {
   using Clock = std::chrono::steady_clock;
   const auto deadline = Clock::now() + std::chrono::milliseconds(timeout_ms);
   for (;;) {
-    if (takePending(out)) {
-      // Drain what is already queued (bounded), without waiting.
-      for (int i = 0; i < 64; ++i) {
-        auto more = handle(0);
-        if (!more) return more.status();
-        if (!*more) break;
-      }
-      takePending(out);
-      return Status::ok();
+    // Everything already queued, without waiting (bounded: a sender faster than this cannot
+    // keep the caller here).
+    for (int i = 0; i < kCommandQueueCapacity; ++i) {
+      auto more = handle(0);
+      if (!more) return more.status();
+      if (!*more) break;
     }
+    if (takePending(out)) return Status::ok();
     const auto left_ms =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
     const int slice = static_cast<int>(std::clamp<long long>(left_ms, 0, kHandleSliceMs));

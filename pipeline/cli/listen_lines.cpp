@@ -92,6 +92,14 @@ ListenLine statsLine(const std::string& channel, const std::uint8_t* d, std::siz
         .add("drops", r->queues[i].drops);
     queues += (i ? ", " : "") + q.str();
   }
+  std::string stalls = "[";
+  for (std::size_t i = 0; i < r->stalls.size(); ++i) {
+    JsonObject st;
+    st.add("stage", r->stalls[i].stage)
+        .add("count", r->stalls[i].count)
+        .add("longest_ms", r->stalls[i].longest_ms, 1);
+    stalls += (i ? ", " : "") + st.str();
+  }
   JsonObject j = header(ListenType::kStats, channel);
   j.add("utime", drivers::toUtime(r->t_ns))
       .add("frames_in", r->frames_in)
@@ -104,7 +112,10 @@ ListenLine statsLine(const std::string& channel, const std::uint8_t* d, std::siz
       .add("e2e_p99_ms", r->e2e_p99_ms, 3)
       .add("e2e_max_ms", r->e2e_max_ms, 3)
       .add("commands_accepted", r->commands.accepted)
-      .add("commands_refused", r->commands.refusedTotal());
+      .add("commands_refused", r->commands.refusedTotal())
+      .add("stalled_stage", r->stalled_stage)
+      .add("stalled_ms", r->stalled_ms, 1)
+      .addRaw("stalls", stalls + "]");
   return done(ListenType::kStats, j);
 }
 

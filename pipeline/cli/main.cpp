@@ -1,4 +1,6 @@
 // svslam: the one executable, with subcommands.
+#include <signal.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -62,6 +64,9 @@ int main(int argc, char** argv) {
     std::fputs(kUsage, stderr);
     return 2;
   }
+  // A file size limit (RLIMIT_FSIZE, systemd's LimitFSIZE=) then makes a write fail with EFBIG,
+  // reported like a full disk (naming the file), instead of killing the process with a core.
+  ::signal(SIGXFSZ, SIG_IGN);
   const std::string cmd = argv[1];
   const std::vector<std::string> args(argv + 2, argv + argc);
   int code = -1;

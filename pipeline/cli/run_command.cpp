@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <system_error>
@@ -20,6 +21,7 @@
 #include "pipeline/cli/commands.hpp"
 #include "pipeline/cli/json_writer.hpp"
 #include "pipeline/config/run_config.hpp"
+#include "pipeline/realtime/fault_injection.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
 #include "pipeline/realtime/slam_stages.hpp"
 #include "pipeline/run/run_outputs.hpp"
@@ -155,6 +157,55 @@ class RefusedCommandLog {
   std::int64_t next_ns_ = 0;
 };
 
+std::string seconds(double ms) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f s", ms * 1e-3);
+  return buf;
+}
+
+// The health check's view of stage stalls (realtime/stage_health.hpp): says on stderr and in
+// systemd's STATUS= when a stage stalls and when it recovers.
+class StallCheck {
+ public:
+  explicit StallCheck(double timeout_s) : timeout_s_(timeout_s) {}
+  // True while a stage is stalled (the caller stops the watchdog pings).
+  bool update(const rt::StageHealth& health, std::int64_t now_ns,
+              service::ServiceNotifier& notifier) {
+    const rt::HealthSnapshot h = health.snapshot(now_ns);
+    if (h.stalled_stage == stalled_ && h.totalStalls() == total_) return !stalled_.empty();
+    for (const rt::StageStall& st : h.stalls) {
+      std::int64_t& seen = seen_[st.stage];
+      const bool now_stalled = st.stage == h.stalled_stage;
+      if (st.stage == stalled_ && !now_stalled) {
+        logLine("stage '" + st.stage + "' recovered: stalled " + std::to_string(st.count) +
+                " time(s), the longest " + seconds(st.longest_ms));
+        if (h.stalled_stage.empty())
+          notifier.status("tracking; stage " + st.stage + " stalled " + std::to_string(st.count) +
+                          " time(s), the longest " + seconds(st.longest_ms));
+      } else if (now_stalled && st.stage != stalled_) {
+        logLine("stage '" + st.stage + "' stalled: working on one frame for " +
+                seconds(h.stalled_ms) + " (service.stall_timeout_s " + seconds(timeout_s_ * 1e3) +
+                "); watchdog pings stopped");
+        notifier.status("stalled: stage " + st.stage + " working on one frame for more than " +
+                        seconds(timeout_s_ * 1e3) + "; watchdog pings stopped");
+      } else if (!now_stalled && st.count > seen) {  // began and ended between two checks
+        logLine("stage '" + st.stage + "' stalled (seen after it ended): " +
+                std::to_string(st.count) + " time(s), the longest " + seconds(st.longest_ms));
+      }
+      seen = st.count;
+    }
+    stalled_ = h.stalled_stage;
+    total_ = h.totalStalls();
+    return !stalled_.empty();
+  }
+
+ private:
+  double timeout_s_;
+  std::string stalled_;  // the stage reported stalled; "" = none
+  std::int64_t total_ = 0;
+  std::map<std::string, std::int64_t> seen_;  // stalls per stage already reported
+};
+
 // The token of lcm.commands (read from its file) when LCM and commands are on; "" otherwise.
 Result<std::string> commandToken(const config::RunConfig& cfg) {
   if (!cfg.lcm.enabled || !cfg.lcm.commands.enabled) return std::string();
@@ -212,7 +263,9 @@ int runPipeline(const std::vector<std::string>& args) {
       "An output folder used before loses the files of the earlier run that this run\n"
       "writes (trajectories, stats.json, map files...); other files stay. Under\n"
       "systemd (Type=notify): READY=1 after the first pose, WATCHDOG=1 while frames\n"
-      "complete. Prints a JSON summary.");
+      "complete and no stage works on one frame for longer than service.stall_timeout_s\n"
+      "(such a stage is named on stderr, in STATUS= and in the stats). A failed write\n"
+      "(disk full) exits 1 naming the file. Prints a JSON summary.");
   p.addOption("source", "SRC",
               "kitti:DIR, euroc:DIR, synthetic[:key=value,...], v4l2:..., libcamera:... or "
               "lcm:CHANNEL (default: the config's 'source', else synthetic)");
@@ -308,9 +361,21 @@ int runPipeline(const std::vector<std::string>& args) {
   const bool keep_newest =
       cfg.pipeline.capture_policy == config::CapturePolicy::kNewest ||
       (cfg.pipeline.capture_policy == config::CapturePolicy::kAuto && (live || opts.rate_hz > 0));
-  rt::PipelineRunner runner(
-      opts, work.graph(keep_newest ? rt::EdgePolicy::kNewest : rt::EdgePolicy::kBlocking));
+  rt::StageGraph graph =
+      work.graph(keep_newest ? rt::EdgePolicy::kNewest : rt::EdgePolicy::kBlocking);
+  if (const config::FaultConfig& f = cfg.pipeline.fault;
+      f.stall_stage != config::FaultStage::kNone) {
+    const rt::StallFault fault{config::toString(f.stall_stage), f.stall_frame, f.stall_ms};
+    if (Status s = rt::injectStall(graph, fault); !s)
+      return fail(Status::invalidArgument("pipeline.fault.stall_stage: " + s.message()));
+    logLine("test hook: stage '" + fault.stage + "' will stall " + std::to_string(fault.ms) +
+            " ms at frame " + std::to_string(fault.frame));
+  }
+  rt::PipelineRunner runner(opts, std::move(graph));
+  const std::int64_t stall_ns = static_cast<std::int64_t>(cfg.service.stall_timeout_s * 1e9);
+  runner.setStallThresholdNs(stall_ns);
   work.setTimings(&runner.timings());
+  work.setHealth(&runner.health());
   std::vector<std::unique_ptr<rt::FrameSlot>> slots;
   const StereoCalibration& calib = source->calibration();
   for (int i = 0; i < runner.slotsNeeded(); ++i) {
@@ -323,8 +388,8 @@ int runPipeline(const std::vector<std::string>& args) {
 
   service::ServiceNotifier notifier;
   const std::int64_t wd_interval = notifier.watchdogIntervalNs();
-  service::HealthWatchdog watchdog(wd_interval,
-                                   static_cast<std::int64_t>(cfg.service.stall_timeout_s * 1e9));
+  service::HealthWatchdog watchdog(wd_interval, stall_ns);
+  StallCheck stall_check(cfg.service.stall_timeout_s);
   rt::PipelineControl control;
   bool ready_sent = false, stopping_sent = false;
   if (cfg.service.ready == config::ReadyWhen::kStart) {
@@ -363,9 +428,14 @@ int runPipeline(const std::vector<std::string>& args) {
     } else if (control.pause) {
       watchdog.idle(now);
     }
+    // A stage working on one frame for longer than service.stall_timeout_s: no pings (systemd
+    // restarts the service after WatchdogSec unless the stage recovers), and the stats on LCM
+    // keep coming with the stalled stage even when no frame is published.
+    const bool stage_stalled = stall_check.update(runner.health(), now, notifier);
+    if (stage_stalled) work.publishStallStats();
     // After STOPPING=1 the service manager's stop timeout applies: no more pings (a notify
     // socket nobody reads any more must not block the drain).
-    if (!stopping_sent && watchdog.shouldPing(now)) notifier.watchdog();
+    if (!stopping_sent && !stage_stalled && watchdog.shouldPing(now)) notifier.watchdog();
     if (progress_ns > 0 && now >= next_progress) {
       logLine("progress: " + std::to_string(published) + " poses, " +
               std::to_string(runner.captured()) + " frames captured");
@@ -377,7 +447,9 @@ int runPipeline(const std::vector<std::string>& args) {
   logWarnings(work.takeWarnings());
 
   std::string error = run_status ? "" : run_status.message();
-  if (Status s = work.finish(); !s && error.empty()) error = s.message();
+  // The files written at the end (on a full disk they fail after the first error, too).
+  if (Status s = work.finish(); !s)
+    error = error.empty() ? s.message() : error + "; then " + s.message();
   const run::StageTimes times = work.stageTimes();
   const rt::PipelineReport& rep = runner.report();
   run::RunSummary summary = work.summary();
@@ -388,13 +460,14 @@ int runPipeline(const std::vector<std::string>& args) {
     refused_log.update(*lcm, rt::steadyNowNs(), true);
     summary.lcm_commands = lcm->commandCounts();
   }
+  // The first error is the one reported; stats.json not written (a full disk) comes after it.
   if (Status s =
           run::writeFileAtomic(out_dir + "/" + run::files::kStats,
                                run::statsJson(cfg, source_spec, summary, work.outputs(), times, rep,
                                               error, work.mapJson(rep.after_publish_skipped),
                                               work.loopJson()));
       !s)
-    return fail(s);
+    error = error.empty() ? s.message() : error + "; then " + s.message();
   if (!error.empty()) return fail(Status::ioError(error));
   JsonObject j;
   j.add("source", source_spec)

@@ -4,6 +4,7 @@ namespace svslam::config {
 
 const char* toString(CapturePolicy p) { return nameOf(kCapturePolicyNames, p); }
 const char* toString(ReadyWhen r) { return nameOf(kReadyWhenNames, r); }
+const char* toString(FaultStage f) { return nameOf(kFaultStageNames, f); }
 
 Status checkPipelineConfig(const std::string& file, const PipelineConfig& p, const LcmConfig& l) {
   const std::pair<const char*, const service::ThreadScheduling*> stages[] = {

@@ -29,6 +29,23 @@ inline constexpr EnumNames<ReadyWhen, 2> kReadyWhenNames{
     {{"first_pose", ReadyWhen::kFirstPose}, {"start", ReadyWhen::kStart}}};
 const char* toString(ReadyWhen r);
 
+// pipeline.fault.*: test hooks (docs/service.md "Injected faults"), off by default. A stage of
+// `svslam run` sleeps once, as if stuck (rt::StallFault), so that the health check's stall
+// reports can be tested on the real pipeline.
+enum class FaultStage { kNone, kCapture, kStereo, kEstimator, kPublisher, kMapper };
+inline constexpr EnumNames<FaultStage, 6> kFaultStageNames{{{"none", FaultStage::kNone},
+                                                            {"capture", FaultStage::kCapture},
+                                                            {"stereo", FaultStage::kStereo},
+                                                            {"estimator", FaultStage::kEstimator},
+                                                            {"publisher", FaultStage::kPublisher},
+                                                            {"mapper", FaultStage::kMapper}}};
+const char* toString(FaultStage f);
+struct FaultConfig {
+  FaultStage stall_stage = FaultStage::kNone;  // the stage that sleeps once; kNone = no fault
+  int stall_frame = 10;  // on the first frame whose capture sequence number is at least this
+  int stall_ms = 2000;   // for this long, ms
+};
+
 struct PipelineConfig {
   rt::PipelineOptions runner;  // sequential, rate_hz, queue_capacity: given to the runner as is
   CapturePolicy capture_policy = CapturePolicy::kAuto;  // the capture edge's queue policy
@@ -44,6 +61,7 @@ struct PipelineConfig {
   double progress_period_s = 10.0;  // progress line on stderr every this many s (0 = never)
   // Per stage thread: CPU affinity and SCHED_FIFO priority (0 = normal scheduling).
   service::ThreadScheduling capture, stereo, estimator, publisher, mapper;
+  FaultConfig fault;  // test hooks only
 };
 
 struct LcmConfig {
@@ -55,8 +73,9 @@ struct LcmConfig {
 
 struct ServiceConfig {
   ReadyWhen ready = ReadyWhen::kFirstPose;  // when READY=1 goes to systemd
-  // The health check pings the watchdog only while frames complete; a pipeline that has
-  // published nothing for this long (and is not paused) stops pinging, s.
+  // The health check pings the watchdog only while frames complete and no stage is stalled: a
+  // pipeline that has published nothing for this long (and is not paused), or a stage that has
+  // been working on one frame for this long, stops the pings, s.
   double stall_timeout_s = 5.0;
 };
 

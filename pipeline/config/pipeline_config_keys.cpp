@@ -61,6 +61,21 @@ ConfigSection pipelineSection() {
   return s;
 }
 
+ConfigSection faultSection() {
+  ConfigSection s{
+      "pipeline.fault", "test hooks: injected faults, off by default (docs/service.md)", {}};
+  s.keys = {
+      choice("stall_stage", SVSLAM_FIELD(pipeline.fault.stall_stage), kFaultStageNames,
+             "test hook: this stage sleeps stall_ms once, as if stuck (the health check reports "
+             "it); none = no fault"),
+      number("stall_frame", SVSLAM_FIELD(pipeline.fault.stall_frame), 0, 100000000, "",
+             "test hook: on the first frame whose capture sequence number is at least this"),
+      number("stall_ms", SVSLAM_FIELD(pipeline.fault.stall_ms), 1, 600000, "ms",
+             "test hook: how long the stage sleeps"),
+  };
+  return s;
+}
+
 ConfigSection lcmSection() {
   ConfigSection s{"lcm", "LCM publishing and commands (docs/lcm.md)", {}};
   s.keys = {
@@ -108,7 +123,8 @@ ConfigSection serviceSection() {
       choice("ready", SVSLAM_FIELD(service.ready), kReadyWhenNames,
              "READY=1 after the first published pose, or when the pipeline starts"),
       number("stall_timeout_s", SVSLAM_FIELD(service.stall_timeout_s), 0.1, 3600, "s",
-             "no pose for this long (not paused): the health check stops pinging the watchdog"),
+             "no pose for this long (not paused), or a stage working on one frame for this long: "
+             "the health check stops pinging the watchdog and reports the stage"),
   };
   return s;
 }
@@ -125,6 +141,7 @@ std::vector<ConfigSection> pipelineConfigSections() {
           scheduling("estimator", SVSLAM_FIELD(pipeline.estimator)),
           scheduling("publisher", SVSLAM_FIELD(pipeline.publisher)),
           scheduling("mapper", SVSLAM_FIELD(pipeline.mapper)),
+          faultSection(),
           lcmSection(),
           lcmCommandsSection(),
           serviceSection()};

@@ -188,6 +188,7 @@ Status LoopStage::process(FrameSlot& slot) {
   }
   if (made) {
     times_.add("keyframe", static_cast<double>(steadyNowNs() - t0) * 1e-6);
+    StageWait waiting;  // on the back end's thread when its ring is full
     m.ring.wait_enqueue(std::move(item));
   }
   return Status::ok();
@@ -238,8 +239,7 @@ Status LoopStage::finish() {
     }
     if (Status s = w.append(t, T); !s) return s;
   }
-  w.close();
-  return Status::ok();
+  return w.close();
 }
 
 std::string LoopStage::json() const {

@@ -67,11 +67,12 @@ class StageEdge {
 class PipelineRunner::Capture {
  public:
   Capture(const SourceSpec& source, double rate_hz, PipelineControl& control,
-          std::atomic<std::int64_t>& captured)
+          std::atomic<std::int64_t>& captured, StageHealth& health)
       : source_(source),
         period_ns_(rate_hz > 0 ? static_cast<std::int64_t>(1e9 / rate_hz) : 0),
         control_(control),
-        captured_(captured) {}
+        captured_(captured),
+        health_(health) {}
   // True while paused (after a short sleep): the caller loops back to its stop check.
   bool paused() {
     if (!control_.pause.load()) return false;
@@ -93,7 +94,11 @@ class PipelineRunner::Capture {
     slot.stamps = FrameStamps{};
     slot.stamps.capture_ns = start;
     slot.stamps.read_start_ns = steadyNowNs();
-    auto more = source_.read(slot);
+    Result<bool> more = false;
+    {
+      StageWork busy(health_, 0);
+      more = source_.read(slot);
+    }
     if (!more || !*more) return more;
     slot.stamps.captured_ns = steadyNowNs();
     if (period_ns_ <= 0) slot.stamps.capture_ns = slot.stamps.captured_ns;
@@ -108,6 +113,7 @@ class PipelineRunner::Capture {
   std::int64_t period_ns_;
   PipelineControl& control_;
   std::atomic<std::int64_t>& captured_;
+  StageHealth& health_;
   std::int64_t start_ns_ = -1, paused_ns_ = 0, k_ = 0;
 };
 
@@ -168,8 +174,17 @@ LatencySummary PipelineReport::stage(const std::string& name) const {
   return LatencySummary{};
 }
 
+namespace {
+// The source, then every stage (the one after publication too).
+std::vector<std::string> stageNames(const StageGraph& g) {
+  std::vector<std::string> names{g.source.name};
+  for (const StageSpec& s : g.stages) names.push_back(s.name);
+  return names;
+}
+}  // namespace
+
 PipelineRunner::PipelineRunner(const PipelineOptions& options, StageGraph graph)
-    : options_(options), graph_(std::move(graph)), timings_(graph_) {}
+    : options_(options), graph_(std::move(graph)), timings_(graph_), health_(stageNames(graph_)) {}
 
 PipelineRunner::~PipelineRunner() = default;
 
@@ -193,6 +208,7 @@ Status PipelineRunner::run(std::vector<std::unique_ptr<FrameSlot>>& slots, Pipel
     for (auto& slot : slots) graph_.prepare_slot(*slot);
   report_ = PipelineReport{};
   timings_.clear();
+  health_.reset();
   published_ = 0;
   captured_ = 0;
   const std::int64_t t0 = steadyNowNs();
@@ -212,6 +228,8 @@ void PipelineRunner::finishReport() {
   for (std::size_t i = 0; i < names.size(); ++i)
     report_.stages.push_back({names[i], timings_.stage(i).summary()});
   report_.end_to_end = timings_.endToEnd().summary();
+  report_.health = health_.snapshot(steadyNowNs());
+  report_.stall_threshold_ns = health_.stallThresholdNs();
   for (std::size_t i = 0; i < report_.edges.size(); ++i) {
     if (i < graph_.stages.size() && graph_.stages[i].after_publish)
       report_.after_publish_skipped += report_.edges[i].drops;  // published, not processed
@@ -223,7 +241,7 @@ void PipelineRunner::finishReport() {
 Status PipelineRunner::runSequential(std::vector<std::unique_ptr<FrameSlot>>& slots,
                                      PipelineControl& control, const std::function<void()>& tick) {
   FrameSlot& slot = *slots.front();
-  Capture capture(graph_.source, options_.rate_hz, control, captured_);
+  Capture capture(graph_.source, options_.rate_hz, control, captured_, health_);
   if (graph_.on_thread_start) graph_.on_thread_start("pipeline");
   Status error;
   while (!control.stop.load() && error) {
@@ -237,6 +255,7 @@ Status PipelineRunner::runSequential(std::vector<std::unique_ptr<FrameSlot>>& sl
     if (!*more) break;
     const std::size_t n_main = numMainStages();
     for (std::size_t i = 0; i < n_main && error; ++i) {
+      StageWork busy(health_, i + 1);
       slot.stamps.start_ns[i] = steadyNowNs();
       error = graph_.stages[i].work(slot);
       slot.stamps.end_ns[i] = steadyNowNs();
@@ -245,6 +264,7 @@ Status PipelineRunner::runSequential(std::vector<std::unique_ptr<FrameSlot>>& sl
     timings_.record(slot);
     published_.fetch_add(1, std::memory_order_relaxed);
     if (n_main < graph_.stages.size()) {  // the stage after publication, on every frame
+      StageWork busy(health_, n_main + 1);
       slot.stamps.start_ns[n_main] = steadyNowNs();
       error = graph_.stages[n_main].work(slot);
       slot.stamps.end_ns[n_main] = steadyNowNs();
@@ -285,7 +305,7 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
   std::vector<std::thread> threads;
   threads.emplace_back([&] {
     threadStart(graph_.source.name);
-    Capture capture(graph_.source, options_.rate_hz, control, captured_);
+    Capture capture(graph_.source, options_.rate_hz, control, captured_, health_);
     std::vector<FrameSlot*> stash;  // slots handed back by a newest-frame edge
     stash.reserve(2);
     while (!control.stop.load()) {
@@ -328,9 +348,13 @@ Status PipelineRunner::runThreaded(std::vector<std::unique_ptr<FrameSlot>>& slot
         if (!slot) break;
         if (this_stage_failed) slot->failed = true;
         if (!slot->failed) {
-          slot->stamps.start_ns[i] = steadyNowNs();
-          const Status s = stage.work(*slot);
-          slot->stamps.end_ns[i] = steadyNowNs();
+          Status s;
+          {
+            StageWork busy(health_, i + 1);
+            slot->stamps.start_ns[i] = steadyNowNs();
+            s = stage.work(*slot);
+            slot->stamps.end_ns[i] = steadyNowNs();
+          }
           if (!s) {
             slot->failed = true;
             this_stage_failed = true;

@@ -21,6 +21,7 @@
 #include "pipeline/realtime/latency_stats.hpp"
 #include "pipeline/realtime/pipeline_options.hpp"
 #include "pipeline/realtime/stage_graph.hpp"
+#include "pipeline/realtime/stage_health.hpp"
 
 namespace svslam::rt {
 
@@ -70,6 +71,9 @@ struct PipelineReport {
   std::vector<EdgeReport> edges;
   double wall_s = 0.0;
   double fps = 0.0;  // published / wall time
+  // Stalls (realtime/stage_health.hpp) with the threshold of the run (0: not counted).
+  HealthSnapshot health;
+  std::int64_t stall_threshold_ns = 0;
   // The stage called `name` (an empty summary when there is none).
   LatencySummary stage(const std::string& name) const;
 };
@@ -92,6 +96,11 @@ class PipelineRunner {
   std::int64_t captured() const { return captured_.load(std::memory_order_relaxed); }
   // The latencies so far: read from the sink stage's work (its thread) or after run().
   const StageTimings& timings() const { return timings_; }
+  // Per-stage health (the source, then every stage): snapshot() from any thread while run()
+  // runs. A stage's frame that takes longer than `ns` counts as a stall (<= 0: none does); set
+  // before run().
+  const StageHealth& health() const { return health_; }
+  void setStallThresholdNs(std::int64_t ns) { health_.setStallThresholdNs(ns); }
   // After run().
   const PipelineReport& report() const { return report_; }
 
@@ -110,6 +119,7 @@ class PipelineRunner {
   PipelineOptions options_;
   StageGraph graph_;
   StageTimings timings_;
+  StageHealth health_;
   std::atomic<std::int64_t> published_{0}, captured_{0};
   PipelineReport report_;
 };

@@ -4,6 +4,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include "pipeline/realtime/stage_health.hpp"
 #include "pipeline/service/scheduling.hpp"
 #include "pipeline/thread_pool_executor.hpp"
 
@@ -156,7 +157,12 @@ Status SlamStages::stereo(FrameSlot& slot) {
   if (stereo_stage_->needsFeedback() && last_stereo_seq_ >= 0) {
     const std::int64_t w0 = steadyNowNs();
     // Closed: the estimator failed (its error, written before the close, is the run's error).
-    if (!feedback_.wait(last_stereo_seq_, fb)) return estimator_error_;
+    bool got = false;
+    {
+      StageWait waiting;  // on the estimator: not this stage's stall
+      got = feedback_.wait(last_stereo_seq_, fb);
+    }
+    if (!got) return estimator_error_;
     stereo_times_.add("wait_estimator", static_cast<double>(steadyNowNs() - w0) * 1e-6);
     stereo_clock_->start();
   }
@@ -254,10 +260,11 @@ void SlamStages::publishMapSummary(TimeNs t_ns) {
 }
 
 Status SlamStages::finish() {
-  publisher_->close();
-  Status s;
-  if (estimator_ && estimator_->outputs().landmark_map)
-    s = writeMap(out_dir_ + "/" + run::files::kLandmarks);
+  Status s = publisher_->close();
+  if (estimator_ && estimator_->outputs().landmark_map) {
+    const Status ws = writeMap(out_dir_ + "/" + run::files::kLandmarks);
+    if (s) s = ws;
+  }
   if (map_stage_) {
     const Status ms = map_stage_->finish();
     if (s) s = ms;

@@ -45,6 +45,11 @@ class SlamStages {
   StageGraph graph(EdgePolicy capture_input);
   // The runner's latencies, for the stats on LCM (read by the publisher on its thread).
   void setTimings(const StageTimings* timings) { publisher_->setTimings(timings); }
+  // The runner's stage health, for the stalls in the stats on LCM.
+  void setHealth(const StageHealth* health) { publisher_->setHealth(health); }
+  // Control loop, while a stage is stalled: the stats on LCM even though no frame is published
+  // (run/run_publisher.hpp).
+  void publishStallStats() { publisher_->publishStallStats(); }
 
   // Capture ends after `n` frames (0 = the whole source).
   void setMaxFrames(int n) { max_frames_ = n; }

@@ -1,5 +1,8 @@
 #include "pipeline/run/run_outputs.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -26,72 +29,100 @@ Status clearRunOutputs(const std::string& dir) {
   return Status::ok();
 }
 
-TrajectoryWriter::~TrajectoryWriter() { close(); }
+AppendFile::~AppendFile() { (void)close(); }
 
-Status TrajectoryWriter::open(const std::string& kitti_path, const std::string& tum_path) {
-  close();
-  kitti_ = std::fopen(kitti_path.c_str(), "w");
-  if (!kitti_)
-    return Status::ioError("cannot create '" + kitti_path + "': " + std::strerror(errno));
-  if (!tum_path.empty()) {
-    tum_ = std::fopen(tum_path.c_str(), "w");
-    if (!tum_) return Status::ioError("cannot create '" + tum_path + "': " + std::strerror(errno));
-  }
-  kitti_path_ = kitti_path;
-  tum_path_ = tum_path;
-  return Status::ok();
-}
-
-Status TrajectoryWriter::append(TimeNs t_ns, const Eigen::Isometry3d& T) {
-  if (!kitti_) return Status::failedPrecondition("trajectory writer is not open");
-  const Eigen::Matrix4d M = T.matrix();
-  if (!M.allFinite()) return Status::invalidArgument("refusing to write a non-finite pose");
-  int n = 0;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c)
-      n = std::fprintf(kitti_, "%s%.9e", r == 0 && c == 0 ? "" : " ", M(r, c));
-  n = std::fprintf(kitti_, "\n");
-  if (n < 0 || std::fflush(kitti_) != 0)
-    return Status::ioError("cannot write '" + kitti_path_ + "': " + std::strerror(errno));
-  if (tum_) {
-    const Eigen::Quaterniond q(T.rotation());
-    const Eigen::Vector3d t = T.translation();
-    n = std::fprintf(tum_, "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n",
-                     static_cast<double>(t_ns) * 1e-9, t.x(), t.y(), t.z(), q.x(), q.y(), q.z(),
-                     q.w());
-    if (n < 0 || std::fflush(tum_) != 0)
-      return Status::ioError("cannot write '" + tum_path_ + "': " + std::strerror(errno));
-  }
-  return Status::ok();
-}
-
-void TrajectoryWriter::close() {
-  if (kitti_) std::fclose(kitti_);
-  if (tum_) std::fclose(tum_);
-  kitti_ = tum_ = nullptr;
-}
-
-LineWriter::~LineWriter() { close(); }
-
-Status LineWriter::open(const std::string& path) {
-  close();
-  f_ = std::fopen(path.c_str(), "w");
-  if (!f_) return Status::ioError("cannot create '" + path + "': " + std::strerror(errno));
+Status AppendFile::open(const std::string& path) {
+  (void)close();
+  error_ = Status::ok();
+  whole_bytes_ = 0;
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) return Status::ioError("cannot create '" + path + "': " + std::strerror(errno));
   path_ = path;
   return Status::ok();
 }
 
-Status LineWriter::append(const std::string& line) {
-  if (!f_) return Status::failedPrecondition("line writer is not open");
-  if (std::fputs(line.c_str(), f_) < 0 || std::fputc('\n', f_) == EOF || std::fflush(f_) != 0)
-    return Status::ioError("cannot write '" + path_ + "': " + std::strerror(errno));
+Status AppendFile::append(const char* data, std::size_t n) {
+  if (fd_ < 0) return Status::failedPrecondition("'" + path_ + "' is not open");
+  if (!error_) return error_;
+  std::size_t done = 0;
+  while (done < n) {
+    const ssize_t w = ::write(fd_, data + done, n - done);
+    if (w > 0) {
+      done += static_cast<std::size_t>(w);
+      continue;
+    }
+    if (w < 0 && errno == EINTR) continue;
+    const int err = w < 0 ? errno : EIO;
+    // Cut the partial line off: the file ends with its last whole line.
+    const bool cut = ::ftruncate(fd_, static_cast<off_t>(whole_bytes_)) == 0 &&
+                     ::lseek(fd_, 0, SEEK_END) == static_cast<off_t>(whole_bytes_);
+    error_ = Status::ioError("cannot write '" + path_ + "': " + std::strerror(err) +
+                             (cut ? " (it keeps the lines written before)" : ""));
+    return error_;
+  }
+  whole_bytes_ += static_cast<std::int64_t>(n);
   return Status::ok();
 }
 
-void LineWriter::close() {
-  if (f_) std::fclose(f_);
-  f_ = nullptr;
+Status AppendFile::close() {
+  if (fd_ < 0) return Status::ok();
+  const int r = ::close(fd_);
+  fd_ = -1;
+  if (r != 0) return Status::ioError("cannot close '" + path_ + "': " + std::strerror(errno));
+  return Status::ok();
 }
+
+Status TrajectoryWriter::open(const std::string& kitti_path, const std::string& tum_path) {
+  (void)close();
+  if (Status s = kitti_.open(kitti_path); !s) return s;
+  if (!tum_path.empty()) return tum_.open(tum_path);
+  return Status::ok();
+}
+
+Status TrajectoryWriter::append(TimeNs t_ns, const Eigen::Isometry3d& T) {
+  if (!kitti_.isOpen()) return Status::failedPrecondition("trajectory writer is not open");
+  const Eigen::Matrix4d M = T.matrix();
+  if (!M.allFinite()) return Status::invalidArgument("refusing to write a non-finite pose");
+  char line[512];  // 12 numbers of at most 16 characters, and their separators
+  int n = 0;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c)
+      n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), "%s%.9e",
+                         r == 0 && c == 0 ? "" : " ", M(r, c));
+  n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), "\n");
+  if (Status s = kitti_.append(line, static_cast<std::size_t>(n)); !s) return s;
+  if (tum_.isOpen()) {
+    const Eigen::Quaterniond q(T.rotation());
+    const Eigen::Vector3d t = T.translation();
+    n = std::snprintf(line, sizeof line, "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n",
+                      static_cast<double>(t_ns) * 1e-9, t.x(), t.y(), t.z(), q.x(), q.y(), q.z(),
+                      q.w());
+    if (n < 0 || n >= static_cast<int>(sizeof line))
+      return Status::invalidArgument("trajectory line too long for '" + tum_.path() + "'");
+    if (Status s = tum_.append(line, static_cast<std::size_t>(n)); !s) return s;
+  }
+  return Status::ok();
+}
+
+Status TrajectoryWriter::close() {
+  const Status a = kitti_.close();
+  const Status b = tum_.close();
+  return a ? b : a;
+}
+
+Status LineWriter::open(const std::string& path) {
+  (void)close();
+  return file_.open(path);
+}
+
+Status LineWriter::append(const std::string& line) {
+  if (!file_.isOpen()) return Status::failedPrecondition("line writer is not open");
+  buf_.assign(line);  // keeps its capacity: no allocation once warm
+  buf_ += '\n';
+  return file_.append(buf_.data(), buf_.size());
+}
+
+Status LineWriter::close() { return file_.close(); }
 
 Status writeLandmarksPly(const std::string& path, const std::vector<PlyLandmark>& landmarks) {
   std::size_t n = 0;
@@ -191,10 +222,18 @@ Status writeFileAtomic(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".tmp";
   std::FILE* f = std::fopen(tmp.c_str(), "w");
   if (!f) return Status::ioError("cannot create '" + tmp + "': " + std::strerror(errno));
-  const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-  if (std::fclose(f) != 0 || !ok) {
+  errno = 0;
+  const bool wrote =
+      std::fwrite(text.data(), 1, text.size(), f) == text.size() && std::fflush(f) == 0;
+  const int write_err = errno;
+  errno = 0;
+  const bool closed = std::fclose(f) == 0;
+  const int close_err = errno;
+  if (!wrote || !closed) {
     std::remove(tmp.c_str());
-    return Status::ioError("cannot write '" + path + "'");
+    const int err = !wrote ? write_err : close_err;
+    return Status::ioError("cannot write '" + path +
+                           "': " + (err != 0 ? std::strerror(err) : "write failed"));
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     std::remove(tmp.c_str());

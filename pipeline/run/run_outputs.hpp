@@ -7,6 +7,7 @@
 //   groundtruth_kitti.txt the source's exact poses, when it has them (synthetic),
 //   stats.json            written at the end (atomically), also after a failure.
 #include <Eigen/Geometry>
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <functional>
@@ -52,39 +53,64 @@ inline constexpr const char* kAll[] = {
 // that cannot be removed.
 Status clearRunOutputs(const std::string& dir);
 
-// One line per pose in a KITTI and a TUM file; each line is flushed when appended.
+// A text file appended one whole line at a time, each line written through to the file
+// (write(2), no user-space buffer). A failed write or close (disk full: ENOSPC; a file size
+// limit: EFBIG, with SIGXFSZ ignored) is an error naming the file and the system's reason, and
+// the file is cut back to its last whole line (what was written before stays intact, byte for
+// byte); every later append then fails with the same error.
+class AppendFile {
+ public:
+  AppendFile() = default;
+  ~AppendFile();
+  AppendFile(const AppendFile&) = delete;
+  AppendFile& operator=(const AppendFile&) = delete;
+  // Creates (truncates) `path`.
+  Status open(const std::string& path);
+  // Appends `n` bytes (one or more whole lines, newline included).
+  Status append(const char* data, std::size_t n);
+  // Closes the file; error when the system reports a failure. No-op when not open.
+  Status close();
+  bool isOpen() const { return fd_ >= 0; }
+  const std::string& path() const { return path_; }
+
+ private:
+  int fd_ = -1;
+  std::string path_;
+  std::int64_t whole_bytes_ = 0;  // bytes of the lines written whole
+  Status error_;                  // the first write error (sticky)
+};
+
+// One line per pose in a KITTI and a TUM file (AppendFile: each line written through, a
+// failure names the file and leaves whole lines).
 class TrajectoryWriter {
  public:
   TrajectoryWriter() = default;
-  ~TrajectoryWriter();
   TrajectoryWriter(const TrajectoryWriter&) = delete;
   TrajectoryWriter& operator=(const TrajectoryWriter&) = delete;
   // Creates (truncates) `kitti_path` and, when not empty, `tum_path`.
   Status open(const std::string& kitti_path, const std::string& tum_path);
   Status append(TimeNs t_ns, const Eigen::Isometry3d& T);
-  void close();
+  // Error when closing either file failed (the first one).
+  Status close();
 
  private:
-  std::FILE* kitti_ = nullptr;
-  std::FILE* tum_ = nullptr;
-  std::string kitti_path_, tum_path_;
+  AppendFile kitti_, tum_;
 };
 
-// A text file written line by line, each line flushed (pose_covariance.txt: 36 numbers per
-// frame, the 6x6 pose covariance row-major, [rot (rad), trans (m)]).
+// A text file written line by line, each line written through (pose_covariance.txt: 36 numbers
+// per frame, the 6x6 pose covariance row-major, [rot (rad), trans (m)]).
 class LineWriter {
  public:
   LineWriter() = default;
-  ~LineWriter();
   LineWriter(const LineWriter&) = delete;
   LineWriter& operator=(const LineWriter&) = delete;
   Status open(const std::string& path);
   Status append(const std::string& line);  // adds the newline
-  void close();
+  Status close();
 
  private:
-  std::FILE* f_ = nullptr;
-  std::string path_;
+  AppendFile file_;
+  std::string buf_;  // the line and its newline, reused
 };
 
 // One landmark of landmarks.ply.
@@ -132,7 +158,9 @@ class StageTimes {
 // Nearest-rank percentile (p in [0, 100]) of `v` (copied, sorted); NaN when empty.
 double percentile(std::vector<double> v, double p);
 
-// Writes `text` to `path` through a temporary file and a rename.
+// Writes `text` to `path` through a temporary file and a rename. On failure the temporary is
+// removed, an earlier file at `path` stays as it was, and the error names `path` and the
+// system's reason.
 Status writeFileAtomic(const std::string& path, const std::string& text);
 
 }  // namespace svslam::run

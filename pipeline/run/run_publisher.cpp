@@ -28,11 +28,11 @@ Status RunPublisher::open(bool ground_truth) {
   return Status::ok();
 }
 
-void RunPublisher::close() {
-  traj_.close();
-  gt_.close();
-  cov_file_.close();
-  latency_file_.close();
+Status RunPublisher::close() {
+  Status first;
+  for (const Status& s : {traj_.close(), gt_.close(), cov_file_.close(), latency_file_.close()})
+    if (first && !s) first = s;
+  return first;
 }
 
 Status RunPublisher::publish(const rt::FrameSlot& slot) {
@@ -100,7 +100,40 @@ void RunPublisher::publishStats(TimeNs t_ns) {
     r.e2e_max_ms = e2e.max_ms;
   }
   r.commands = lcm_->commandCounts();
+  const std::int64_t now = rt::steadyNowNs();
+  addHealth(r, now);
   (void)lcm_->publishStats(r);
+  std::lock_guard<std::mutex> lock(stats_mu_);
+  last_stats_ = std::move(r);
+  last_stats_ns_ = now;
+}
+
+void RunPublisher::addHealth(drivers::StatsReport& r, std::int64_t now_ns) const {
+  r.stalled_stage.clear();
+  r.stalled_ms = 0;
+  r.stalls.clear();
+  if (!health_) return;
+  const rt::HealthSnapshot h = health_->snapshot(now_ns);
+  r.stalled_stage = h.stalled_stage;
+  r.stalled_ms = h.stalled_ms;
+  for (const rt::StageStall& s : h.stalls) r.stalls.push_back({s.stage, s.count, s.longest_ms});
+}
+
+void RunPublisher::publishStallStats() {
+  if (!lcm_) return;
+  const std::int64_t now = rt::steadyNowNs();
+  const std::int64_t period_ns = static_cast<std::int64_t>(cfg_.lcm.stats_period_s * 1e9);
+  std::lock_guard<std::mutex> lock(stats_mu_);
+  const std::int64_t last = last_stats_ns_.load();
+  if (last != 0 && now - last < period_ns) return;
+  drivers::StatsReport r = last_stats_;
+  if (last != 0) r.t_ns += now - last;
+  r.frames_in = captured_.load();
+  r.commands = lcm_->commandCounts();
+  addHealth(r, now);
+  (void)lcm_->publishStats(r);
+  last_stats_ = std::move(r);
+  last_stats_ns_ = now;
 }
 
 }  // namespace svslam::run

@@ -8,6 +8,7 @@
 // Runs on one thread; every buffer is reused from frame to frame.
 #include <atomic>
 #include <cstdint>
+#include <mutex>
 #include <string>
 
 #include "core/status.hpp"
@@ -31,11 +32,19 @@ class RunPublisher {
   Status publish(const rt::FrameSlot& slot);
   // The runner's latencies for the stats on LCM (null: none sent).
   void setTimings(const rt::StageTimings* timings) { timings_ = timings; }
-  void close();
+  // The runner's stage health for the stalls in the stats (null: none reported).
+  void setHealth(const rt::StageHealth* health) { health_ = health; }
+  // Any thread (the control loop, while a stage is stalled): when no stats went out for
+  // lcm.stats_period_s, sends the last ones again with the frame count and the stalls of now
+  // (t_ns moved on by the time since). Nothing without LCM.
+  void publishStallStats();
+  // Closes the files; error naming the first file whose close failed.
+  Status close();
   const RunSummary& summary() const { return summary_; }
 
  private:
   void publishStats(TimeNs t_ns);
+  void addHealth(drivers::StatsReport& r, std::int64_t now_ns) const;
 
   const config::RunConfig& cfg_;
   std::string out_dir_;
@@ -43,6 +52,11 @@ class RunPublisher {
   drivers::LcmLink* lcm_;
   const std::atomic<std::int64_t>& captured_;
   const rt::StageTimings* timings_ = nullptr;
+  const rt::StageHealth* health_ = nullptr;
+  // The last stats sent and when (steady clock), for publishStallStats.
+  std::mutex stats_mu_;
+  drivers::StatsReport last_stats_;
+  std::atomic<std::int64_t> last_stats_ns_{0};
   TrajectoryWriter traj_, gt_;
   LineWriter cov_file_, latency_file_;
   std::string cov_line_;      // one pose_covariance.txt line, reused

@@ -127,6 +127,22 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
   queues += "]";
   p.addRaw("queues", queues);
   j.addRaw("pipeline", p.str());
+  {  // stage stalls: a stage working on one frame for longer than service.stall_timeout_s
+    std::string stages = "[";
+    const rt::HealthSnapshot& h = pipeline.health;
+    for (std::size_t i = 0; i < h.stalls.size(); ++i) {
+      JsonObject st;
+      st.add("stage", h.stalls[i].stage)
+          .add("count", h.stalls[i].count)
+          .add("longest_ms", h.stalls[i].longest_ms, 1);
+      stages += (i ? ", " : "") + st.str();
+    }
+    JsonObject sj;
+    sj.add("timeout_s", cfg.service.stall_timeout_s, 3)
+        .add("count", h.totalStalls())
+        .addRaw("stages", stages + "]");
+    j.addRaw("stalls", sj.str());
+  }
   if (!map_json.empty()) j.addRaw("map", map_json);
   if (!loop_json.empty()) j.addRaw("loop", loop_json);
   if (s.lcm_commands) {

@@ -22,6 +22,7 @@
 #include <thread>
 
 #include "cli_helpers.hpp"
+#include "command_flood.hpp"
 #include "drivers/lcm/lcm_messages.hpp"
 #include "drivers/lcm/lcm_transport.hpp"
 #include "svslam_lcm/command_status_t.hpp"
@@ -273,6 +274,85 @@ TEST(LcmPipeline, CommandsAreAppliedAndAnswered) {
   runInNamespace("CommandsAreAppliedAndAnswered");
 }
 
+// Collects the stats_t reports.
+struct StatsSink {
+  std::mutex mu;
+  std::vector<StatsReport> got;
+  LcmLink::RawHandler handler() {
+    return [this](const std::uint8_t* data, std::size_t size) {
+      svslam_lcm::stats_t m;
+      if (!decodeLcm(data, size, m)) return;
+      auto r = fromLcm(m);
+      if (!r) return;
+      std::lock_guard<std::mutex> lock(mu);
+      got.push_back(*r);
+    };
+  }
+};
+
+// The estimator sleeps 2.5 s once (pipeline.fault), stall timeout 1 s: while it is stalled no
+// pose is published, yet stats_t keep coming every stats_period_s (sent by the health check) and
+// name it; the last ones count the stall.
+TEST(LcmPipeline, InnerStalledStageIsOnTheStatsChannel) {
+  if (!inner("StalledStageIsOnTheStatsChannel"))
+    GTEST_SKIP() << "runs inside the namespace of StalledStageIsOnTheStatsChannel";
+  const fs::path dir =
+      fs::temp_directory_path() / ("svslam_lcmstall_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path cfg = dir / "stall.yaml";
+  std::ofstream(cfg) << "service: {stall_timeout_s: 1.0}\n"
+                        "lcm: {stats_period_s: 0.25}\nmap: {enabled: false}\n"
+                        "pipeline:\n  fault: {stall_stage: estimator, stall_frame: 20, "
+                        "stall_ms: 2500}\n";
+  LcmParams p;
+  p.url = kUrl;
+  auto link = LcmLink::open(p);
+  ASSERT_TRUE(link.isOk()) << link.status().message();
+  StatsSink sink;
+  ASSERT_TRUE((*link)->subscribeRaw(p.stats_channel, sink.handler()).isOk());
+  std::atomic<bool> stop{false};
+  std::thread rx([&] {
+    while (!stop.load()) (void)(*link)->handle(50);
+  });
+  const int rc = std::system((std::string(SVSLAM_CLI) + " run --config " + cfg.string() +
+                              " --source synthetic:width=320,height=240,frames=80 --rate 20"
+                              " --lcm-url '" +
+                              kUrl + "' --out " + (dir / "out").string() + " > " +
+                              (dir / "run_out.txt").string() + " 2>&1")
+                                 .c_str());
+  std::this_thread::sleep_for(300ms);
+  stop = true;
+  rx.join();
+  ASSERT_EQ(WEXITSTATUS(rc), 0) << slurp(dir / "run_out.txt");
+  std::lock_guard<std::mutex> lock(sink.mu);
+  int naming = 0;
+  std::int64_t frames_out_during = -1;
+  bool same_frames_out = true;
+  for (const StatsReport& r : sink.got) {
+    if (r.stalled_stage.empty()) continue;
+    EXPECT_EQ(r.stalled_stage, "estimator");
+    EXPECT_GT(r.stalled_ms, 1000.0);
+    ++naming;
+    if (frames_out_during >= 0 && r.frames_out != frames_out_during) same_frames_out = false;
+    frames_out_during = r.frames_out;
+  }
+  // Visible for about 1.5 s at one report per 0.25 s.
+  EXPECT_GE(naming, 3) << sink.got.size() << " stats received\n" << slurp(dir / "run_out.txt");
+  EXPECT_TRUE(same_frames_out);  // no pose during the stall
+  ASSERT_FALSE(sink.got.empty());
+  const StatsReport& last = sink.got.back();
+  EXPECT_EQ(last.stalled_stage, "");
+  ASSERT_EQ(last.stalls.size(), 1u);
+  EXPECT_EQ(last.stalls[0].stage, "estimator");
+  EXPECT_EQ(last.stalls[0].count, 1);
+  EXPECT_GE(last.stalls[0].longest_ms, 2500.0);
+  fs::remove_all(dir);
+}
+
+TEST(LcmPipeline, StalledStageIsOnTheStatsChannel) {
+  runInNamespace("StalledStageIsOnTheStatsChannel");
+}
+
 // Sends `c` every 100 ms for `period` (no answer expected).
 void sendFor(LcmLink& link, const Command& c, std::chrono::milliseconds period) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -369,6 +449,102 @@ TEST(LcmPipeline, InnerCommandsDisabledByDefaultIgnoreShutdown) {
 
 TEST(LcmPipeline, CommandsDisabledByDefaultIgnoreShutdown) {
   runInNamespace("CommandsDisabledByDefaultIgnoreShutdown");
+}
+
+// 1 000 commands a second for 3 s while a run replays at 10 Hz (test/support/command_flood.hpp:
+// valid ones with the token, a wrong token, no token, the token on another channel, malformed
+// bytes): every refused and malformed message is counted exactly, the valid ones are rate-limited
+// to lcm.commands.max_per_s (burst included) and each accepted one is answered, the ones on the
+// other channel are not seen at all, and no frame is dropped. The latency cost of the flood is a
+// benchmark (bench/bench_command_flood.cpp, docs/lcm.md), not checked here.
+TEST(LcmPipeline, InnerCommandFloodIsCountedAndHarmless) {
+  if (!inner("CommandFloodIsCountedAndHarmless"))
+    GTEST_SKIP() << "runs inside the namespace of CommandFloodIsCountedAndHarmless";
+  const fs::path dir =
+      fs::temp_directory_path() / ("svslam_lcmflood_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string cfg = writeCommandConfig(dir);
+  std::ofstream(cfg, std::ios::app) << "    max_per_s: 20\n"
+                                       "dense_stereo: {enabled: false}\nmap: {enabled: false}\n";
+  // exec: the pid is svslam's own, for the SIGTERM below.
+  const pid_t run = spawn("exec " + std::string(SVSLAM_CLI) + " run --config " + cfg +
+                          " --source synthetic:width=320,height=240,frames=100000 --rate 10"
+                          " --lcm-url '" +
+                          kUrl + "' --out " + (dir / "out").string() + " > " +
+                          (dir / "run_out.txt").string() + " 2>&1");
+  LcmParams p;
+  p.url = kUrl;
+  auto link = LcmLink::open(p);
+  ASSERT_TRUE(link.isOk()) << link.status().message();
+  StatusSink sink;
+  ASSERT_TRUE((*link)->subscribeRaw(p.status_channel, sink.handler()).isOk());
+  std::atomic<bool> stop{false};
+  std::thread rx([&] {
+    while (!stop.load()) (void)(*link)->handle(50);
+  });
+  // The run listens once it answers a resume.
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!sink.has(1) && std::chrono::steady_clock::now() - t0 < 30s) {
+    (void)(*link)->publishCommand({0, 1, CommandKind::kResume, "", kToken});
+    std::this_thread::sleep_for(300ms);
+  }
+  ASSERT_TRUE(sink.has(1)) << slurp(dir / "run_out.txt");
+  std::this_thread::sleep_for(1500ms);  // late answers to the resends above; the bucket refills
+  std::size_t answers_before = 0;
+  {
+    std::lock_guard<std::mutex> lock(sink.mu);
+    answers_before = sink.got.size();
+  }
+  constexpr std::int64_t kFirstSeq = 1000;
+  test::CommandFlood flood(**link, kToken, kFirstSeq);
+  const test::FloodCounts sent = flood.run(1000.0, 3000ms);
+  std::this_thread::sleep_for(1500ms);  // the last ones handled and answered
+  EXPECT_TRUE(running(run)) << "the flood stopped the run";
+  ::kill(run, SIGTERM);
+  const int rc = waitExit(run, std::chrono::seconds(60));
+  stop = true;
+  rx.join();
+  const std::string log = slurp(dir / "run_out.txt");
+  ASSERT_EQ(rc, 0) << log;
+  EXPECT_EQ(sent.failed_to_send, 0);
+  EXPECT_EQ(sent.total(), 3000);
+  std::int64_t flood_answers = 0, answers = 0;
+  {
+    std::lock_guard<std::mutex> lock(sink.mu);
+    answers = static_cast<std::int64_t>(sink.got.size());
+    for (const CommandStatus& st : sink.got)
+      if (st.seq >= kFirstSeq) {
+        ++flood_answers;
+        EXPECT_LT(st.seq, kFirstSeq + sent.valid);
+        EXPECT_EQ(st.command, "resume");
+        EXPECT_TRUE(st.ok);
+      }
+  }
+  EXPECT_EQ(answers - static_cast<std::int64_t>(answers_before), flood_answers);
+  const std::string stats = slurp(dir / "out" / "stats.json");
+  // Exact: each refused message once, by its reason; the other channel's never.
+  EXPECT_EQ(jsonCount(stats, "bad_token"), sent.bad_token) << stats;
+  EXPECT_EQ(jsonCount(stats, "no_token"), sent.no_token) << stats;
+  EXPECT_EQ(jsonCount(stats, "malformed"), sent.malformed) << stats;
+  EXPECT_EQ(jsonCount(stats, "disabled"), 0) << stats;
+  EXPECT_EQ(jsonCount(stats, "accepted"), answers) << stats;  // every accepted one answered
+  EXPECT_EQ(jsonCount(stats, "rate_limited"), sent.valid - flood_answers) << stats;
+  // 20 per second, bursts of 20: at most 20 + 20 per second of flood (with a 10 % clock margin),
+  // and the gate keeps accepting through the flood.
+  EXPECT_LE(flood_answers, 20 + static_cast<std::int64_t>(20 * sent.seconds * 1.1) + 1);
+  EXPECT_GE(flood_answers, static_cast<std::int64_t>(20 * sent.seconds * 0.5));
+  // No frame lost at 10 Hz: every frame captured was published.
+  EXPECT_EQ(jsonCount(stats, "frames_dropped"), 0) << stats;
+  EXPECT_EQ(jsonCount(stats, "frames_captured"), jsonCount(stats, "frames_published")) << stats;
+  EXPECT_GT(jsonCount(stats, "frames_published"), 40) << stats;
+  // The refused ones are logged at most about once a second, never with the token.
+  EXPECT_LE(countLines(log, "LCM command(s) ("), 12) << log;
+  EXPECT_EQ(log.find(kToken), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(LcmPipeline, CommandFloodIsCountedAndHarmless) {
+  runInNamespace("CommandFloodIsCountedAndHarmless");
 }
 
 // Commands enabled and the token file missing, empty or open to others: exit 1 before the run

@@ -75,6 +75,9 @@ void writeLog(const std::string& path) {
   drivers::StatsReport stats;
   stats.t_ns = 2'000'000'000;
   stats.frames_in = 10;
+  stats.stalled_stage = "mapper";
+  stats.stalled_ms = 1500.25;
+  stats.stalls = {{"mapper", 2, 2500.5}};
   ASSERT_TRUE(l.publishStats(stats).isOk());
   drivers::MapSummaryReport map;
   map.t_ns = 3'000'000'000;
@@ -150,6 +153,10 @@ TEST_F(ListenTest, PrintsEveryTypeOnceWithItsChannel) {
   for (const char* e : expected) EXPECT_EQ(countOf(out_, e), 1) << e << "\n" << out_;
   EXPECT_NE(out_.find(R"("position": [1, 2, 3])"), std::string::npos) << out_;
   EXPECT_NE(out_.find(R"("landmarks_in_map": 7, "num_points": 2)"), std::string::npos) << out_;
+  EXPECT_NE(out_.find(R"("stalled_stage": "mapper", "stalled_ms": 1500.2, )"
+                      R"("stalls": [{"stage": "mapper", "count": 2, "longest_ms": 2500.5}])"),
+            std::string::npos)
+      << out_;
   EXPECT_NE(out_.find(R"("valid_cells": 8, "mean_height_m": 2.0000)"), std::string::npos) << out_;
   EXPECT_NE(out_.find(R"("keyframe_utime": [1000000, 2000000])"), std::string::npos) << out_;
   EXPECT_NE(out_.find(R"("position": [[0, 0, 0], [0.5, -0.25, 0]])"), std::string::npos) << out_;

@@ -13,6 +13,8 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -36,7 +38,7 @@ int countOf(const std::string& s, const std::string& needle) {
 }
 
 class Service : public ::testing::Test {
- protected:
+ public:
   void SetUp() override {
     dir_ = fs::temp_directory_path() / ("svslam_svc_" + std::to_string(::getpid()));
     fs::create_directories(dir_);
@@ -194,9 +196,130 @@ TEST_F(Service, ReadyWatchdogAndCleanStopOnSigterm) {
   EXPECT_NE(stats.find("\"frames\": " + std::to_string(frames) + ","), std::string::npos) << stats;
   EXPECT_EQ(stats.back(), '\n');
   EXPECT_TRUE(fs::exists(out / "landmarks.ply"));
+  // Without the fault hook no stage stalls.
+  EXPECT_NE(stats.find(R"("stalls": {"timeout_s": 5.000, "count": 0, "stages": []})"),
+            std::string::npos)
+      << stats;
+  EXPECT_EQ(got_.find("STATUS=stalled"), std::string::npos) << got_;
   for (const auto& e : fs::directory_iterator(out))  // no temporary file left behind
     EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
   EXPECT_NE(slurp(dir_ / "stderr.txt").find("stop requested (signal 15)"), std::string::npos);
+}
+
+// A notification and when it arrived (s since the start of the collection).
+struct Note {
+  double t_s;
+  std::string text;
+};
+
+// Notifications until `pid` exits (at most `timeout`, then SIGKILL); returns the exit code.
+int collectUntilExit(int fd, pid_t pid, std::vector<Note>& notes, std::chrono::seconds timeout) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto since = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  for (;;) {
+    char buf[512];
+    const ssize_t n = ::recv(fd, buf, sizeof buf - 1, 0);  // SO_RCVTIMEO: 100 ms
+    if (n > 0) {
+      buf[n] = 0;
+      notes.push_back({since(), buf});
+      continue;
+    }
+    int st = 0;
+    if (::waitpid(pid, &st, WNOHANG) == pid) return svslam::test::exitCode(st);
+    if (since() > static_cast<double>(timeout.count())) {
+      ::kill(pid, SIGKILL);
+      waitExit(pid);
+      return -1;
+    }
+  }
+}
+
+// The index of the first note at or after `from` containing `text` (-1: none).
+int findNote(const std::vector<Note>& notes, const std::string& text, int from = 0) {
+  for (int i = std::max(from, 0); i < static_cast<int>(notes.size()); ++i)
+    if (notes[static_cast<std::size_t>(i)].text.find(text) != std::string::npos) return i;
+  return -1;
+}
+
+// The number after `key` in `text` (NaN when absent).
+double numberAfter(const std::string& text, const std::string& key) {
+  const std::size_t at = text.find(key);
+  return at == std::string::npos ? NAN : std::atof(text.c_str() + at + key.size());
+}
+
+// pipeline.fault's hook makes `stage` sleep stall_ms once, longer than service.stall_timeout_s:
+// the health check names the stage in STATUS=, sends no WATCHDOG=1 from then until the stage
+// recovers, pings again afterwards, and stats.json counts one stall of that stage (and nothing
+// else). For the mapper (after publication) poses keep coming during the stall, so only the
+// stage check stops the pings.
+// `extra`: more configuration (the mapper, at nice +10, can take over a second for a frame on
+// saturated cores: a run that does not test it leaves it out).
+void expectStallReported(Service& t, int fd, const fs::path& dir, const std::string& stage,
+                         double timeout_s, int stall_ms, const std::string& extra) {
+  const std::string cfg = (dir / "stall.yaml").string();
+  std::ofstream(cfg) << "service: {stall_timeout_s: " << timeout_s << "}\n"
+                     << extra << "pipeline:\n  fault: {stall_stage: " << stage
+                     << ", stall_frame: 20, stall_ms: " << stall_ms << "}\n";
+  const pid_t pid =
+      t.start("--source synthetic:width=320,height=240,frames=100 --rate 20 --config " + cfg);
+  ASSERT_GT(pid, 0);
+  std::vector<Note> notes;
+  const int rc = collectUntilExit(fd, pid, notes, 180s);
+  const std::string err = slurp(dir / "stderr.txt");
+  ASSERT_EQ(rc, 0) << err;
+  std::string all;
+  for (const Note& n : notes) all += std::to_string(n.t_s) + " " + n.text + "\n";
+  const int stalled = findNote(notes, "STATUS=stalled: stage " + stage + " working on one frame");
+  ASSERT_GE(stalled, 0) << all << err;
+  const int recovered =
+      findNote(notes, "STATUS=tracking; stage " + stage + " stalled 1 time(s)", stalled);
+  ASSERT_GT(recovered, stalled) << all << err;
+  const auto& ns = notes;
+  // Reported once timeout_s passed, recovered when the sleep ends (the check runs every 100 ms).
+  EXPECT_GE(ns[static_cast<std::size_t>(recovered)].t_s - ns[static_cast<std::size_t>(stalled)].t_s,
+            stall_ms * 1e-3 - timeout_s - 0.5)
+      << all;
+  EXPECT_GE(findNote(notes, "WATCHDOG=1"), 0) << all;
+  EXPECT_LT(findNote(notes, "WATCHDOG=1"), stalled) << all;  // pinging before the stall
+  const int ping_in_stall = findNote(notes, "WATCHDOG=1", stalled);
+  EXPECT_GT(ping_in_stall, recovered) << "a watchdog ping while '" << stage << "' was stalled\n"
+                                      << all;
+  EXPECT_GE(ping_in_stall, 0) << "no ping after the recovery\n" << all;
+  EXPECT_NE(err.find("stage '" + stage + "' stalled: working on one frame"), std::string::npos)
+      << err;
+  EXPECT_NE(err.find("stage '" + stage + "' recovered"), std::string::npos) << err;
+  const std::string stats = slurp(dir / "out" / "stats.json");
+  char timeout[32];
+  std::snprintf(timeout, sizeof timeout, "%.3f", timeout_s);
+  const std::string named = std::string(R"("stalls": {"timeout_s": )") + timeout +
+                            R"(, "count": 1, "stages": [{"stage": ")" + stage +
+                            R"(", "count": 1, "longest_ms": )";
+  ASSERT_NE(stats.find(named), std::string::npos) << stats;
+  const double longest = numberAfter(stats, named);
+  EXPECT_GE(longest, stall_ms) << stats;
+  EXPECT_LT(longest, 20000.0) << stats;
+}
+
+TEST_F(Service, StalledEstimatorStopsThePingsAndIsNamed) {
+  expectStallReported(*this, fd_, dir_, "estimator", 1.0, 2500, "map: {enabled: false}\n");
+}
+
+TEST_F(Service, StalledMapperStopsThePingsWhilePosesFlow) {
+  expectStallReported(*this, fd_, dir_, "mapper", 1.5, 3000, "");
+}
+
+TEST_F(Service, StallHookOnAStageThisRunLacksIsRefused) {
+  const std::string cfg = (dir_ / "nomap.yaml").string();
+  std::ofstream(cfg) << "map: {enabled: false}\npipeline: {fault: {stall_stage: mapper}}\n";
+  const int rc = waitExit(start("--source synthetic:width=320,height=240,frames=3 --config " + cfg));
+  const std::string err = slurp(dir_ / "stderr.txt");
+  EXPECT_EQ(rc, 1) << err;
+  EXPECT_NE(err.find("pipeline.fault.stall_stage: stall fault: this pipeline has no stage "
+                     "'mapper' (stages: capture, stereo, estimator, publisher)"),
+            std::string::npos)
+      << err;
 }
 
 TEST_F(Service, NoWatchdogPingWithoutProgress) {

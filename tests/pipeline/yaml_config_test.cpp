@@ -223,3 +223,22 @@ TEST(RunConfig, LcmCommandsAreOffByDefaultAndNeedATokenFile) {
   EXPECT_NE(errorOf("lcm: {commands: {token: abc}}\n").find("lcm.commands.token"),
             std::string::npos);  // unknown key: the token never goes in the config
 }
+
+TEST(RunConfig, StallFaultIsOffByDefaultAndChecked) {
+  RunConfig d;
+  EXPECT_EQ(d.pipeline.fault.stall_stage, svslam::config::FaultStage::kNone);
+  RunConfig c;
+  ASSERT_TRUE(parseRunConfig("pipeline: {fault: {stall_stage: mapper, stall_frame: 3, "
+                             "stall_ms: 2500}}\n",
+                             "t.yaml", c)
+                  .isOk());
+  EXPECT_EQ(c.pipeline.fault.stall_stage, svslam::config::FaultStage::kMapper);
+  EXPECT_EQ(c.pipeline.fault.stall_frame, 3);
+  EXPECT_EQ(c.pipeline.fault.stall_ms, 2500);
+  EXPECT_NE(errorOf("pipeline: {fault: {stall_stage: vme}}\n").find("'pipeline.fault.stall_stage'"),
+            std::string::npos);
+  EXPECT_NE(errorOf("pipeline: {fault: {stall_ms: 0}}\n").find("'pipeline.fault.stall_ms'"),
+            std::string::npos);
+  EXPECT_NE(errorOf("pipeline: {fault: {stall_frame: -1}}\n").find("'pipeline.fault.stall_frame'"),
+            std::string::npos);
+}

@@ -104,6 +104,9 @@ TEST(LcmMessages, StatsRoundTripAndRejection) {
   r.e2e_p50_ms = 20.0;
   r.e2e_p99_ms = 40.0;
   r.e2e_max_ms = 55.5;
+  r.stalled_stage = "estimator";
+  r.stalled_ms = 1250.5;
+  r.stalls = {{"mapper", 2, 3000.25}, {"estimator", 1, 1250.5}};
   auto m = toLcm(r);
   ASSERT_TRUE(m.isOk()) << m.status().message();
   auto back = fromLcm(roundTripBytes(*m));
@@ -117,8 +120,24 @@ TEST(LcmMessages, StatsRoundTripAndRejection) {
   EXPECT_EQ(back->queues[0].name, "capture->stereo");
   EXPECT_EQ(back->queues[0].drops, 3);
   EXPECT_EQ(back->e2e_max_ms, 55.5);
+  EXPECT_EQ(back->stalled_stage, "estimator");
+  EXPECT_EQ(back->stalled_ms, 1250.5);
+  ASSERT_EQ(back->stalls.size(), 2u);
+  EXPECT_EQ(back->stalls[0].stage, "mapper");
+  EXPECT_EQ(back->stalls[0].count, 2);
+  EXPECT_EQ(back->stalls[0].longest_ms, 3000.25);
+  EXPECT_EQ(back->stalls[1].stage, "estimator");
 
   StatsReport bad = r;
+  bad.stalled_ms = 0;  // a stalled stage without its duration
+  EXPECT_FALSE(toLcm(bad).isOk());
+  bad = r;
+  bad.stalls[1].count = 0;
+  EXPECT_FALSE(toLcm(bad).isOk());
+  bad = r;
+  bad.stalls[0].longest_ms = NAN;
+  EXPECT_FALSE(toLcm(bad).isOk());
+  bad = r;
   bad.stages[0].p99_ms = NAN;
   EXPECT_FALSE(toLcm(bad).isOk());
   bad = r;
@@ -127,6 +146,15 @@ TEST(LcmMessages, StatsRoundTripAndRejection) {
   auto inconsistent = *m;
   inconsistent.num_stages = 3;  // arrays hold 2
   EXPECT_FALSE(fromLcm(inconsistent).isOk());
+  inconsistent = *m;
+  inconsistent.num_stalls = 1;  // arrays hold 2
+  EXPECT_FALSE(fromLcm(inconsistent).isOk());
+  // A stall count that says more strings follow than the bytes hold: refused before decoding.
+  std::vector<std::uint8_t> buf;
+  ASSERT_TRUE(encodeLcm(*m, buf).isOk());
+  svslam_lcm::stats_t out;
+  ASSERT_TRUE(decodeLcm(buf.data(), buf.size(), out).isOk());
+  EXPECT_FALSE(decodeLcm(buf.data(), buf.size() - 1, out).isOk());
 }
 
 TEST(LcmMessages, MapSummaryRoundTripAndRejection) {
