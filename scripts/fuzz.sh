@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs one libFuzzer harness of tests/fuzz for real (docs/testing.md "Fuzzing").
+# Runs one libFuzzer harness of tests/fuzz for real (docs/pipeline.md "Fuzzing").
 #
 #   scripts/fuzz.sh list                  the harnesses
 #   scripts/fuzz.sh NAME SECONDS [-merge] [LIBFUZZER_FLAG...]
