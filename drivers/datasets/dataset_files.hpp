@@ -26,7 +26,7 @@ Result<std::vector<TimeNs>> parseKittiTimes(const std::string& text, const std::
 struct EurocSensor {
   std::array<double, 4> intrinsics{};  // fu, fv, cu, cv (px); fu, fv > 0
   std::array<double, 4> distortion{};  // k1, k2, p1, p2
-  int width = 0, height = 0;           // resolution (px), > 0
+  int width = 0, height = 0;           // resolution (px), integers in [1, 65536]
   Eigen::Isometry3d T_BS = Eigen::Isometry3d::Identity();  // sensor to body
 };
 Result<EurocSensor> parseEurocSensor(const std::string& text, const std::string& file);

@@ -1,5 +1,6 @@
 // euroc:DIR source (see stereo_source.hpp): raw distorted pairs rectified with OpenCV.
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/calib3d.hpp>
@@ -108,10 +109,14 @@ Result<EurocSensor> parseEurocSensor(const std::string& text, const std::string&
   EurocSensor s;
   std::copy(intr->begin(), intr->end(), s.intrinsics.begin());
   std::copy(dist->begin(), dist->end(), s.distortion.begin());
+  // Checked before the conversion: a double out of int's range converts with undefined behaviour.
+  for (double side : *res)
+    if (!(side >= 1.0 && side <= 65536.0) || side != std::floor(side))
+      return Status::corruptData(file + ": resolution must be two integers in [1, 65536]");
   s.width = static_cast<int>((*res)[0]);
   s.height = static_cast<int>((*res)[1]);
-  if (s.intrinsics[0] <= 0 || s.intrinsics[1] <= 0 || s.width <= 0 || s.height <= 0)
-    return Status::corruptData(file + ": focal lengths and resolution must be > 0");
+  if (s.intrinsics[0] <= 0 || s.intrinsics[1] <= 0)
+    return Status::corruptData(file + ": focal lengths must be > 0");
   s.T_BS = *tbs;
   return s;
 }
