@@ -10,6 +10,9 @@ packages=(build-essential cmake pkg-config git
           lld
           # build cache: the build scripts compile through it when present (scripts/ccache_env.sh)
           ccache
+          # fuzzing (scripts/fuzz.sh): clang, and libFuzzer with the sanitizer runtimes (only
+          # recommended by clang, and recommends are not installed here)
+          clang libclang-rt-14-dev
           # elevation map files: GeoTIFF writer/reader (drivers/files/dem_files.cpp)
           libgdal-dev
           # loop closing back end: pose-graph optimisation (src/loop/pose_graph.cpp, Ceres >= 2.1;

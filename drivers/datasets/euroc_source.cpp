@@ -1,4 +1,6 @@
 // euroc:DIR source (see stereo_source.hpp): raw distorted pairs rectified with OpenCV.
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/calib3d.hpp>
@@ -6,6 +8,7 @@
 #include <sstream>
 #include <vector>
 
+#include "drivers/datasets/dataset_files.hpp"
 #include "drivers/files/image_io.hpp"
 #include "drivers/files/opencv_view.hpp"
 #include "drivers/files/trajectory_io.hpp"
@@ -27,49 +30,24 @@ struct EurocCamera {
 
 Result<EurocCamera> readCamera(const fs::path& cam_dir) {
   const std::string yaml = (cam_dir / "sensor.yaml").string();
-  auto text = readTextFile(yaml);
-  if (!text) return text.status();
-  auto intr = yamlNumberList(*text, "", "intrinsics", yaml);
-  if (!intr) return intr.status();
-  auto dist = yamlNumberList(*text, "", "distortion_coefficients", yaml);
-  if (!dist) return dist.status();
-  auto res = yamlNumberList(*text, "", "resolution", yaml);
-  if (!res) return res.status();
-  auto tbs = readEurocTbs(yaml);
-  if (!tbs) return tbs.status();
-  if (intr->size() != 4 || dist->size() != 4 || res->size() != 2)
-    return Status::corruptData(
-        yaml +
-        ": expected intrinsics [fu fv cu cv], 4 distortion coefficients and resolution [w h]");
-  EurocCamera c;
-  c.K = (cv::Mat_<double>(3, 3) << (*intr)[0], 0, (*intr)[2], 0, (*intr)[1], (*intr)[3], 0, 0, 1);
-  c.D = (cv::Mat_<double>(1, 4) << (*dist)[0], (*dist)[1], (*dist)[2], (*dist)[3]);
-  c.size = cv::Size(static_cast<int>((*res)[0]), static_cast<int>((*res)[1]));
-  if ((*intr)[0] <= 0 || (*intr)[1] <= 0 || c.size.width <= 0 || c.size.height <= 0)
-    return Status::corruptData(yaml + ": focal lengths and resolution must be > 0");
-  c.T_BS = *tbs;
+  auto yaml_text = readTextFile(yaml);
+  if (!yaml_text) return yaml_text.status();
+  auto sensor = parseEurocSensor(*yaml_text, yaml);
+  if (!sensor) return sensor.status();
   const std::string csv = (cam_dir / "data.csv").string();
-  std::ifstream f(csv);
-  if (!f) return Status::notFound("cannot open " + csv);
-  std::string line;
-  int line_no = 0;
-  while (std::getline(f, line)) {
-    ++line_no;
-    if (line.empty() || line[0] == '#') continue;
-    const auto comma = line.find(',');
-    if (comma == std::string::npos)
-      return Status::corruptData(csv + ":" + std::to_string(line_no) +
-                                 ": expected 'timestamp,filename'");
-    std::string name = line.substr(comma + 1);
-    while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
-    try {
-      c.t_ns.push_back(std::stoll(line.substr(0, comma)));
-    } catch (const std::exception&) {
-      return Status::corruptData(csv + ":" + std::to_string(line_no) + ": bad timestamp");
-    }
-    c.files.push_back((cam_dir / "data" / name).string());
-  }
-  if (c.files.empty()) return Status::corruptData(csv + ": no image listed");
+  auto csv_text = readTextFile(csv);
+  if (!csv_text) return csv_text.status();
+  auto list = parseEurocDataCsv(*csv_text, csv);
+  if (!list) return list.status();
+  const auto& k = sensor->intrinsics;
+  const auto& d = sensor->distortion;
+  EurocCamera c;
+  c.K = (cv::Mat_<double>(3, 3) << k[0], 0, k[2], 0, k[1], k[3], 0, 0, 1);
+  c.D = (cv::Mat_<double>(1, 4) << d[0], d[1], d[2], d[3]);
+  c.size = cv::Size(sensor->width, sensor->height);
+  c.T_BS = sensor->T_BS;
+  c.t_ns = std::move(list->t_ns);
+  for (const std::string& name : list->names) c.files.push_back((cam_dir / "data" / name).string());
   return c;
 }
 
@@ -114,6 +92,59 @@ class EurocSource final : public StereoSource {
 };
 
 }  // namespace
+
+Result<EurocSensor> parseEurocSensor(const std::string& text, const std::string& file) {
+  auto intr = yamlNumberList(text, "", "intrinsics", file);
+  if (!intr) return intr.status();
+  auto dist = yamlNumberList(text, "", "distortion_coefficients", file);
+  if (!dist) return dist.status();
+  auto res = yamlNumberList(text, "", "resolution", file);
+  if (!res) return res.status();
+  auto tbs = parseEurocTbs(text, file);
+  if (!tbs) return tbs.status();
+  if (intr->size() != 4 || dist->size() != 4 || res->size() != 2)
+    return Status::corruptData(
+        file +
+        ": expected intrinsics [fu fv cu cv], 4 distortion coefficients and resolution [w h]");
+  EurocSensor s;
+  std::copy(intr->begin(), intr->end(), s.intrinsics.begin());
+  std::copy(dist->begin(), dist->end(), s.distortion.begin());
+  // Checked before the conversion: a double out of int's range converts with undefined behaviour.
+  for (double side : *res)
+    if (!(side >= 1.0 && side <= 65536.0) || side != std::floor(side))
+      return Status::corruptData(file + ": resolution must be two integers in [1, 65536]");
+  s.width = static_cast<int>((*res)[0]);
+  s.height = static_cast<int>((*res)[1]);
+  if (s.intrinsics[0] <= 0 || s.intrinsics[1] <= 0)
+    return Status::corruptData(file + ": focal lengths must be > 0");
+  s.T_BS = *tbs;
+  return s;
+}
+
+Result<EurocImageList> parseEurocDataCsv(const std::string& text, const std::string& file) {
+  std::istringstream f(text);
+  EurocImageList out;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(f, line)) {
+    ++line_no;
+    if (line.empty() || line[0] == '#') continue;
+    const auto comma = line.find(',');
+    if (comma == std::string::npos)
+      return Status::corruptData(file + ":" + std::to_string(line_no) +
+                                 ": expected 'timestamp,filename'");
+    std::string name = line.substr(comma + 1);
+    while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
+    try {
+      out.t_ns.push_back(std::stoll(line.substr(0, comma)));
+    } catch (const std::exception&) {
+      return Status::corruptData(file + ":" + std::to_string(line_no) + ": bad timestamp");
+    }
+    out.names.push_back(name);
+  }
+  if (out.names.empty()) return Status::corruptData(file + ": no image listed");
+  return out;
+}
 
 Result<std::unique_ptr<StereoSource>> openEurocSource(const std::string& dir) {
   const fs::path mav = fs::path(dir) / "mav0";

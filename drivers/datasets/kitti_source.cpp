@@ -7,6 +7,7 @@
 #include <sstream>
 #include <vector>
 
+#include "drivers/datasets/dataset_files.hpp"
 #include "drivers/files/image_io.hpp"
 #include "drivers/source/stereo_source.hpp"
 
@@ -49,12 +50,20 @@ Result<std::vector<double>> parseNumbers(const std::string& line, const std::str
   return v;
 }
 
-// calib.txt: P0 then P1, 12 numbers each, optionally labelled "P0:". Both cameras of a
-// rectified pair share fx, fy, cx, cy; P1 holds -fx * baseline in its 4th number.
-Result<StereoCalibration> readCalibration(const fs::path& calib_path) {
-  std::ifstream cf(calib_path);
-  if (!cf) return Status::notFound("cannot open " + calib_path.string());
-  const std::string file = calib_path.string();
+// The whole of a small text file, or notFound naming it.
+Result<std::string> readText(const fs::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) return Status::notFound("cannot open " + path.string());
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  if (f.bad()) return Status::ioError("cannot read " + path.string());
+  return ss.str();
+}
+
+}  // namespace
+
+Result<StereoCalibration> parseKittiCalibration(const std::string& text, const std::string& file) {
+  std::istringstream cf(text);
   std::vector<std::vector<double>> P;
   std::string line;
   int line_no = 0;
@@ -95,16 +104,15 @@ Result<StereoCalibration> readCalibration(const fs::path& calib_path) {
   return c;
 }
 
-// times.txt: one stamp (seconds) per line, increasing, within the range of int64 nanoseconds.
-Result<std::vector<TimeNs>> readTimes(const fs::path& path) {
-  std::ifstream tf(path);
+Result<std::vector<TimeNs>> parseKittiTimes(const std::string& text, const std::string& file) {
+  std::istringstream tf(text);
   std::vector<TimeNs> t;
   std::string line;
   int line_no = 0;
   double last = 0;
   while (std::getline(tf, line)) {
     ++line_no;
-    const std::string where = path.string() + ":" + std::to_string(line_no);
+    const std::string where = file + ":" + std::to_string(line_no);
     auto v = parseNumbers(line, where);
     if (!v) return v.status();
     if (v->empty()) continue;
@@ -123,6 +131,8 @@ Result<std::vector<TimeNs>> readTimes(const fs::path& path) {
   }
   return t;
 }
+
+namespace {
 
 class KittiSource final : public StereoSource {
  public:
@@ -204,7 +214,9 @@ Result<std::unique_ptr<StereoSource>> openKittiSource(const std::string& dir) {
   if (left.empty())
     return Status::notFound("KITTI folder " + dir + ": no frame has both a left and a right image");
 
-  auto calib = readCalibration(d / "calib.txt");
+  auto calib_text = readText(d / "calib.txt");
+  if (!calib_text) return calib_text.status();
+  auto calib = parseKittiCalibration(*calib_text, (d / "calib.txt").string());
   if (!calib) return calib.status();
   auto first = loadGrey(left[0]);
   if (!first) return first.status();
@@ -216,7 +228,9 @@ Result<std::unique_ptr<StereoSource>> openKittiSource(const std::string& dir) {
   // times.txt (seconds; one per frame name found in either folder) when present, else 10 Hz.
   std::vector<TimeNs> t;
   if (fs::exists(d / "times.txt")) {
-    auto all = readTimes(d / "times.txt");
+    auto times_text = readText(d / "times.txt");
+    if (!times_text) return times_text.status();
+    auto all = parseKittiTimes(*times_text, (d / "times.txt").string());
     if (!all) return all.status();
     if (all->size() != names.size())
       return Status::corruptData((d / "times.txt").string() + ": " + std::to_string(all->size()) +

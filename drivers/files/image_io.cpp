@@ -13,6 +13,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <span>
 #include <vector>
 
 #include "drivers/files/file_bytes.hpp"
@@ -109,7 +110,7 @@ std::uint32_t byteSwap(std::uint32_t v) {
 }
 
 // Next white-space separated token of at most 32 characters, starting at pos.
-std::string nextToken(const Bytes& b, std::size_t& pos) {
+std::string nextToken(std::span<const unsigned char> b, std::size_t& pos) {
   auto space = [](unsigned char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
   while (pos < b.size() && space(b[pos])) ++pos;
   std::string tok;
@@ -216,7 +217,11 @@ Result<ImageU8> loadMask(const std::string& path) {
 Result<ImageF32> readPfm(const std::string& path) {
   Result<Bytes> file = readFileBytes(path, "PFM file");
   if (!file.isOk()) return file.status();
-  const Bytes& b = *file;
+  return parsePfm(file->data(), file->size(), path);
+}
+
+Result<ImageF32> parsePfm(const unsigned char* data, std::size_t size, const std::string& path) {
+  const std::span<const unsigned char> b(data, size);
   auto bad = [&](const std::string& why) {
     return Status::corruptData("bad PFM header in " + path + ": " + why);
   };

@@ -12,6 +12,7 @@
 //  - Writers write `path + ".tmp"` and rename it to `path`, so a reader never sees half a
 //    file; on failure they return ioError naming the path and leave no ".tmp" behind.
 //  - File extensions are matched case-insensitively.
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -47,6 +48,9 @@ Result<ImageU8> loadMask(const std::string& path);
 // Colour PFM ("PF") -> invalidArgument; truncated or garbled header or pixel data -> corruptData
 // with the reason.
 Result<ImageF32> readPfm(const std::string& path);
+// The same from the file's bytes (readPfm reads the file, then calls this); `path` names the
+// file in errors.
+Result<ImageF32> parsePfm(const unsigned char* data, std::size_t size, const std::string& path);
 
 // Writes "Pf\n<W> <H>\n-1.0\n" then little-endian floats, bottom row first. The path must end in
 // ".pfm"; img must be non-empty.

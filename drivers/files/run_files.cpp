@@ -29,11 +29,14 @@ struct Json {
   enum class Type { kNull, kBool, kNumber, kString, kArray, kObject } type = Type::kNull;
   double number = NAN;
   std::string text;
-  std::vector<std::pair<std::string, Json>> members;  // object
-  std::vector<Json> items;                            // array
+  // Object members as two parallel vectors: a std::pair holding the incomplete Json is
+  // rejected by clang with libstdc++ (the fuzz build), a vector of it is not.
+  std::vector<std::string> keys;  // object
+  std::vector<Json> values;       // object, values[i] under keys[i]
+  std::vector<Json> items;        // array
   const Json* find(const std::string& key) const {
-    for (const auto& m : members)
-      if (m.first == key) return &m.second;
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (keys[i] == key) return &values[i];
     return nullptr;
   }
 };
@@ -107,10 +110,12 @@ class JsonParser {
           if (pos_ >= s_.size() || s_[pos_++] != ':') return false;
         }
         if (!value(item, depth + 1)) return false;
-        if (obj)
-          v.members.emplace_back(std::move(key), std::move(item));
-        else
+        if (obj) {
+          v.keys.push_back(std::move(key));
+          v.values.push_back(std::move(item));
+        } else {
           v.items.push_back(std::move(item));
+        }
         skip();
         if (pos_ >= s_.size()) return false;
         if (s_[pos_] == ',') {
@@ -269,7 +274,9 @@ Result<std::vector<StageTimeSummary>> readStageTimes(const std::string& stats_js
   if (root.type != Json::Type::kObject || !stages || stages->type != Json::Type::kObject)
     return Status::corruptData(stats_json_path + ": no \"stage_ms\" object");
   std::vector<StageTimeSummary> out;
-  for (const auto& [name, v] : stages->members) {
+  for (std::size_t i = 0; i < stages->keys.size(); ++i) {
+    const std::string& name = stages->keys[i];
+    const Json& v = stages->values[i];
     if (v.type != Json::Type::kObject) continue;
     StageTimeSummary s;
     s.stage = name;

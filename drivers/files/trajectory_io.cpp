@@ -50,6 +50,14 @@ Result<TrajectoryFile> readTrajectory(const std::string& path) {
     return Status::notFound("trajectory file does not exist: " + path);
   std::ifstream f(path);
   if (!f) return Status::ioError("cannot open trajectory file " + path);
+  std::ostringstream text;
+  text << f.rdbuf();
+  if (f.bad()) return Status::ioError("cannot read trajectory file " + path);
+  return parseTrajectory(text.str(), path);
+}
+
+Result<TrajectoryFile> parseTrajectory(const std::string& text, const std::string& path) {
+  std::istringstream f(text);
   TrajectoryFile out;
   std::string line;
   int line_no = 0;
@@ -129,7 +137,11 @@ Result<TrajectoryFile> readTrajectory(const std::string& path) {
 Result<Eigen::Isometry3d> readEurocTbs(const std::string& sensor_yaml) {
   auto text = readTextFile(sensor_yaml);
   if (!text) return text.status();
-  auto v = yamlNumberList(*text, "T_BS", "data", sensor_yaml);
+  return parseEurocTbs(*text, sensor_yaml);
+}
+
+Result<Eigen::Isometry3d> parseEurocTbs(const std::string& text, const std::string& sensor_yaml) {
+  auto v = yamlNumberList(text, "T_BS", "data", sensor_yaml);
   if (!v) return v.status();
   if (v->size() != 16) return Status::corruptData(sensor_yaml + ": T_BS data must have 16 numbers");
   Eigen::Matrix4d M;

@@ -28,9 +28,14 @@ inline constexpr double kRotationTolerance = 1e-3;
 // 8). '#' starts a comment. Every line must have the same format and finite values, a rotation
 // (kRotationTolerance) and, for TUM, a time stamp within the range of int64 nanoseconds.
 Result<TrajectoryFile> readTrajectory(const std::string& path);
+// The same from the file's text (readTrajectory reads the file, then calls this); `path` names
+// the file in errors.
+Result<TrajectoryFile> parseTrajectory(const std::string& text, const std::string& path);
 
 // T_BS (sensor to body) from an EuRoC sensor.yaml: the 16 numbers after "data:" under "T_BS:".
 Result<Eigen::Isometry3d> readEurocTbs(const std::string& sensor_yaml);
+// The same from the text of sensor.yaml; `sensor_yaml` names the file in errors.
+Result<Eigen::Isometry3d> parseEurocTbs(const std::string& text, const std::string& sensor_yaml);
 
 // Pairs the poses of two trajectories: by index when either has no timestamps (then the counts
 // must match), else each estimate stamp with the nearest ground-truth stamp within max_dt_s.

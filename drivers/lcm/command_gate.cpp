@@ -1,5 +1,6 @@
 #include "drivers/lcm/command_gate.hpp"
 
+#include <cstdint>
 #include <utility>
 
 #include "core/constant_time.hpp"
@@ -25,8 +26,10 @@ Status CommandAuthParams::validate() const {
 }
 
 std::int64_t CommandCounts::refusedTotal() const {
+  // Saturated: counts received from the wire (stats_t) may add up past int64.
   std::int64_t n = 0;
-  for (std::int64_t r : refused) n += r;
+  for (std::int64_t r : refused)
+    if (__builtin_add_overflow(n, r, &n)) return r > 0 ? INT64_MAX : INT64_MIN;
   return n;
 }
 

@@ -37,7 +37,7 @@ struct CommandCounts {
   std::int64_t accepted = 0;
   std::array<std::int64_t, kNumCommandRefusals> refused{};  // indexed by CommandRefusal
 
-  std::int64_t refusedTotal() const;
+  std::int64_t refusedTotal() const;  // sum of refused, saturated to the int64 range
   std::int64_t refusedBy(CommandRefusal r) const { return refused[static_cast<int>(r)]; }
 };
 

@@ -9,7 +9,12 @@ namespace svslam::config {
 
 ConfigReader::ConfigReader() : root_(YAML::NodeType::Map), name_("(defaults)") {}
 
-Status ConfigReader::index(const YAML::Node& n, const std::string& prefix) {
+Status ConfigReader::index(const YAML::Node& n, const std::string& prefix, int depth) {
+  // An alias inside the map it names ("a: &x {b: *x}") makes the tree infinitely deep.
+  if (depth > kMaxDepth)
+    return Status::invalidArgument(name_ + ": maps nested more than " +
+                                   std::to_string(kMaxDepth) +
+                                   " deep (an alias inside its own anchor?) at '" + prefix + "'");
   for (const auto& kv : n) {
     const std::string where = prefix.empty() ? "the top level" : "'" + prefix + "'";
     if (!kv.first.IsScalar())
@@ -19,7 +24,7 @@ Status ConfigReader::index(const YAML::Node& n, const std::string& prefix) {
       return Status::invalidArgument(name_ + ": duplicate key '" + path + "'");
     if (keys_.size() > kMaxKeys)
       return Status::invalidArgument(name_ + ": more than " + std::to_string(kMaxKeys) + " keys");
-    if (kv.second.IsMap()) SVSLAM_TRY(index(kv.second, path));
+    if (kv.second.IsMap()) SVSLAM_TRY(index(kv.second, path, depth + 1));
   }
   return Status::ok();
 }
@@ -34,7 +39,7 @@ Result<ConfigReader> ConfigReader::fromString(const std::string& text, const std
   }
   if (r.root_.IsNull()) r.root_ = YAML::Node(YAML::NodeType::Map);
   if (!r.root_.IsMap()) return Status::invalidArgument(name + ": the top level must be a map");
-  if (Status s = r.index(r.root_, ""); !s) return s;
+  if (Status s = r.index(r.root_, "", 0); !s) return s;
   return r;
 }
 

@@ -32,6 +32,7 @@ class ConfigReader {
   static Result<ConfigReader> fromFile(const std::string& path);
   static Result<ConfigReader> fromString(const std::string& text, const std::string& name);
   static constexpr std::size_t kMaxKeys = 100000;  // key paths in a file (aliases expanded)
+  static constexpr int kMaxDepth = 64;  // levels of nested maps (a self-referencing alias: error)
 
   Status read(const std::string& key, double& v, double min_value, double max_value);
   Status read(const std::string& key, float& v, double min_value, double max_value);
@@ -53,8 +54,9 @@ class ConfigReader {
 
  private:
   YAML::Node find(const std::string& key) const;  // undefined node when absent
-  // Indexes the key paths under `n` (a map) into keys_; error on a duplicate key.
-  Status index(const YAML::Node& n, const std::string& prefix);
+  // Indexes the key paths under `n` (a map, `depth` levels down) into keys_; error on a
+  // duplicate key or deeper than kMaxDepth.
+  Status index(const YAML::Node& n, const std::string& prefix, int depth);
   Status error(const std::string& key, const std::string& what) const;
   // The number at `key` checked against [min_value, max_value]; present = false when absent.
   Status readNumber(const std::string& key, bool& present, double& x, double min_value,

@@ -242,3 +242,14 @@ TEST(RunConfig, StallFaultIsOffByDefaultAndChecked) {
   EXPECT_NE(errorOf("pipeline: {fault: {stall_frame: -1}}\n").find("'pipeline.fault.stall_frame'"),
             std::string::npos);
 }
+
+// An alias inside the map it names recursed without end while the keys were indexed (stack
+// overflow, found with fuzz_yaml_config): now an error, as is any nesting deeper than kMaxDepth.
+TEST(RunConfig, RecursiveAliasIsAnError) {
+  EXPECT_NE(errorOf("a: &d\n  b: *d\n").find("nested more than"), std::string::npos);
+  std::string deep;
+  for (int i = 0; i <= svslam::config::ConfigReader::kMaxDepth + 1; ++i) deep += "{k: ";
+  deep += "1";
+  for (int i = 0; i <= svslam::config::ConfigReader::kMaxDepth + 1; ++i) deep += "}";
+  EXPECT_NE(errorOf(deep + "\n").find("nested more than"), std::string::npos);
+}

@@ -74,5 +74,17 @@ TEST(CommandAuthParams, Validate) {
   EXPECT_FALSE(p.validate().isOk());
 }
 
+// Counts decoded from a stats_t of the wire overflowed int64 when summed (found by
+// fuzz_lcm_listen): the total saturates.
+TEST(CommandGate, RefusedTotalSaturates) {
+  CommandCounts c;
+  c.refused.fill(INT64_MAX / 2 + 1);
+  EXPECT_EQ(c.refusedTotal(), INT64_MAX);
+  c.refused.fill(0);
+  c.refused[0] = 3;
+  c.refused[1] = 4;
+  EXPECT_EQ(c.refusedTotal(), 7);
+}
+
 }  // namespace
 }  // namespace svslam::drivers

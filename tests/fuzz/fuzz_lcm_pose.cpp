@@ -1,0 +1,16 @@
+// svslam_lcm.pose_t as received: the validating decoder, the conversion to a PoseReport, and
+// back to the wire (a pose accepted from the wire must be publishable again).
+#include <cstdint>
+#include <cstdlib>
+
+#include "drivers/lcm/lcm_messages.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace svslam::drivers;
+  svslam_lcm::pose_t m;
+  if (!decodeLcm(data, size, m)) return 0;
+  auto r = fromLcm(m);
+  if (!r) return 0;
+  if (!toLcm(*r)) std::abort();
+  return 0;
+}
