@@ -175,6 +175,7 @@ Result<PoseReport> fromLcm(const svslam_lcm::pose_t& m) {
   r.t_ns = *t;
   r.publish_t_ns = *tp;
   r.seq = m.seq;
+  if (m.frame_id.empty()) return Status::invalidArgument(what + ": empty frame_id");
   r.frame_id = m.frame_id;
   Eigen::Vector3d p(m.position[0], m.position[1], m.position[2]);
   Eigen::Quaterniond q(m.orientation[0], m.orientation[1], m.orientation[2], m.orientation[3]);

@@ -90,6 +90,11 @@ TEST(LcmMessages, PoseRejectsNaNAsymmetryAndBadRotation) {
   m2 = m;
   m2.utime = std::numeric_limits<std::int64_t>::max();  // ns overflow
   EXPECT_FALSE(fromLcm(m2).isOk());
+  m2 = m;
+  m2.frame_id.clear();  // what toLcm refuses to send is refused on receipt (found by fuzzing)
+  auto no_frame = fromLcm(m2);
+  ASSERT_FALSE(no_frame.isOk());
+  EXPECT_NE(no_frame.status().message().find("frame_id"), std::string::npos);
 }
 
 TEST(LcmMessages, StatsRoundTripAndRejection) {
