@@ -57,6 +57,7 @@ EkfSlam::EkfSlam(const EkfSlamParams& params) : params_(params) {
     rank_update_ws_.assign(ws_piece_ * static_cast<std::size_t>(params_.max_update_tasks), 0.0);
   }
   ids_.reserve(static_cast<std::size_t>(params_.max_landmarks));
+  slot_of_id_.reserve(params_.max_landmarks);
   accepted_.reserve(static_cast<std::size_t>(params_.max_batch_observations));
 }
 
@@ -67,18 +68,13 @@ Status EkfSlam::reset(const Eigen::Isometry3d& T_world_cam, const Matrix6d& P0) 
   T_world_cam_ = Eigen::Isometry3d::Identity();
   T_world_cam_.linear() = orthonormalised(T_world_cam.linear());
   T_world_cam_.translation() = T_world_cam.translation();
-  for (int id : ids_) slot_of_id_[static_cast<std::size_t>(id)] = -1;
+  slot_of_id_.clear();
   ids_.clear();
   P_.topLeftCorner<6, 6>() = 0.5 * (P0 + P0.transpose());
   return Status::ok();
 }
 
-void EkfSlam::reserveIds(int n) { slot_of_id_.reserve(static_cast<std::size_t>(std::max(n, 0))); }
-
-int EkfSlam::slotOf(int id) const {
-  if (id < 0 || id >= static_cast<int>(slot_of_id_.size())) return -1;
-  return slot_of_id_[static_cast<std::size_t>(id)];
-}
+int EkfSlam::slotOf(int id) const { return slot_of_id_.find(id); }
 
 void EkfSlam::gatherColumns(int c0, int k, Eigen::MatrixXd& out) const {
   const int n = stateDim();
@@ -311,7 +307,7 @@ Result<int> EkfSlam::addLandmark(const Eigen::Vector3d& z_cam, const Eigen::Matr
   m_world_.col(s) = initLandmark(T_world_cam_, z_cam);
   const int id = next_id_++;
   ids_.push_back(id);
-  slot_of_id_.push_back(s);
+  slot_of_id_.set(id, s);
   return id;
 }
 
@@ -332,7 +328,7 @@ Result<int> EkfSlam::addLandmarkFromExactPose(const Eigen::Isometry3d& T_world_c
 Status EkfSlam::restoreLandmark(int id, const Eigen::Vector3d& m_world,
                                 const Eigen::Matrix3d& cov) {
   if (!init_status_) return init_status_;
-  if (id < 0 || id >= static_cast<int>(slot_of_id_.size()))
+  if (id < 0 || id >= next_id_)
     return Status::notFound("restoreLandmark: landmark " + std::to_string(id) + " was never added");
   if (slotOf(id) >= 0)
     return Status::failedPrecondition("restoreLandmark: landmark " + std::to_string(id) +
@@ -358,10 +354,7 @@ void EkfSlam::appendUncorrelated(int id, const Eigen::Vector3d& m_world,
   P_.block<3, 3>(n, n) = cov;
   m_world_.col(s) = m_world;
   ids_.push_back(id);
-  if (id == static_cast<int>(slot_of_id_.size()))
-    slot_of_id_.push_back(s);
-  else
-    slot_of_id_[static_cast<std::size_t>(id)] = s;
+  slot_of_id_.set(id, s);
 }
 
 Status EkfSlam::removeLandmark(int id, Eigen::Vector3d* m_world, Eigen::Matrix3d* cov) {
@@ -381,10 +374,10 @@ Status EkfSlam::removeLandmark(int id, Eigen::Vector3d* m_world, Eigen::Matrix3d
     P_.block<3, 3>(o, o) = P_.block<3, 3>(ol, ol);
     m_world_.col(s) = m_world_.col(last);
     ids_[static_cast<std::size_t>(s)] = ids_[static_cast<std::size_t>(last)];
-    slot_of_id_[static_cast<std::size_t>(ids_[static_cast<std::size_t>(s)])] = s;
+    slot_of_id_.set(ids_[static_cast<std::size_t>(s)], s);
   }
   ids_.pop_back();
-  slot_of_id_[static_cast<std::size_t>(id)] = -1;
+  slot_of_id_.erase(id);
   return Status::ok();
 }
 

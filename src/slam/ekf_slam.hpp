@@ -47,7 +47,7 @@
 // Storage: P for max_landmarks is allocated in the constructor (the state works on its
 // top-left stateDim() block, so adding a landmark never reallocates); predict, update (up to
 // max_batch_observations per batch), addLandmark and removeLandmark allocate nothing once
-// `results` has reached its size and while ids stay below reserveIds() (the products run in the
+// `results` has reached its size (the id -> slot table holds max_landmarks; the products run in the
 // matrix kernels on preallocated workspaces; without hardware FMA, Eigen's products may take
 // their blocking workspace from the heap for large operands).
 // Inputs are checked before anything changes: non-finite values, non-rotations, covariances
@@ -62,6 +62,7 @@
 #include "core/executor.hpp"
 #include "core/status.hpp"
 #include "simd/matrix_kernels.hpp"
+#include "slam/id_slot_map.hpp"
 #include "slam/pose_jacobians.hpp"
 
 namespace svslam {
@@ -142,9 +143,6 @@ class EkfSlam {
   int numLandmarks() const { return static_cast<int>(ids_.size()); }
   const std::vector<int>& landmarkIds() const { return ids_; }  // in state order
   int stateDim() const { return 6 + 3 * numLandmarks(); }
-  // Preallocates the id -> state slot table for ids 0 .. n - 1 (ids are never reused, so the
-  // table grows with every landmark ever added; beyond n it grows by doubling).
-  void reserveIds(int n);
   // The full symmetric covariance, stateDim()^2, in the order [pose, landmarkIds()...].
   // Allocates: for tests and diagnostics.
   Eigen::MatrixXd covariance() const;
@@ -154,7 +152,7 @@ class EkfSlam {
   // failedPrecondition naming `what` when the state holds max_landmarks landmarks.
   Status checkRoom(const char* what) const;
   // Appends landmark `id` at m_world (m) with covariance cov (m^2) and no cross covariance.
-  // Preconditions: checkRoom passed; id is the next new id (slot_of_id_.size()) or a removed one.
+  // Preconditions: checkRoom passed; id is the next new id or a removed one.
   void appendUncorrelated(int id, const Eigen::Vector3d& m_world, const Eigen::Matrix3d& cov);
   // out.topRows(n) = columns [c0, c0 + k) of the full P, from the stored lower triangle.
   void gatherColumns(int c0, int k, Eigen::MatrixXd& out) const;
@@ -174,7 +172,7 @@ class EkfSlam {
   Eigen::Matrix3Xd m_world_;     // 3 x max_landmarks, the first numLandmarks() columns used
   Eigen::MatrixXd P_;            // capacity^2; lower triangle of the active stateDim()^2 block
   std::vector<int> ids_;         // id of each state slot
-  std::vector<int> slot_of_id_;  // state slot of each id, -1 once removed
+  IdSlotMap slot_of_id_;         // state slot of each id in the state (<= max_landmarks)
   int next_id_ = 0;
   // Workspaces (capacity rows).
   Eigen::MatrixXd P_pose_;   // n x 6, full P columns of the pose

@@ -8,7 +8,7 @@ namespace svslam {
 LandmarkManager::LandmarkManager(int patch_half_px, int reserve_landmarks, double voxel_m)
     : h_(patch_half_px), big_(2 * patch_half_px), retired_(voxel_m, reserve_landmarks) {
   const std::size_t n = static_cast<std::size_t>(std::max(reserve_landmarks, 0));
-  slot_of_id_.reserve(n);
+  slot_of_id_.reserve(static_cast<int>(n));
   free_slots_.reserve(n);
   info_.reserve(n);
   views_.reserve(n);
@@ -17,9 +17,7 @@ LandmarkManager::LandmarkManager(int patch_half_px, int reserve_landmarks, doubl
 
 void LandmarkManager::add(int id, int frame, ImageView<const std::uint8_t> img, int x, int y,
                           const Eigen::Isometry3d& T_world_cam, const Eigen::Vector3d& p_cam) {
-  const std::size_t k = static_cast<std::size_t>(id);
-  if (k >= slot_of_id_.size()) slot_of_id_.resize(k + 1, -1);
-  int slot = slot_of_id_[k];
+  int slot = slot_of_id_.find(id);
   if (slot < 0) {
     if (!free_slots_.empty()) {
       slot = free_slots_.back();
@@ -30,7 +28,7 @@ void LandmarkManager::add(int id, int frame, ImageView<const std::uint8_t> img, 
       views_.emplace_back();
       patches_.resize(patches_.size() + patchBytes());
     }
-    slot_of_id_[k] = slot;
+    slot_of_id_.set(id, slot);
     ++slots_used_;
   }
   const std::size_t sl = static_cast<std::size_t>(slot);
@@ -50,15 +48,15 @@ void LandmarkManager::retire(int id) {
   if (m.anchored) return;
   retired_.insert(m);
   free_slots_.push_back(static_cast<int>(slotOf(id)));
-  slot_of_id_[static_cast<std::size_t>(id)] = -1;
+  slot_of_id_.erase(id);
   --slots_used_;
 }
 
 std::vector<MapLandmark> LandmarkManager::landmarks() const {
   std::vector<MapLandmark> out;
   out.reserve(static_cast<std::size_t>(size()));
-  for (const int slot : slot_of_id_)
-    if (slot >= 0) out.push_back(info_[static_cast<std::size_t>(slot)]);
+  slot_of_id_.forEach(
+      [&](int /*id*/, int slot) { out.push_back(info_[static_cast<std::size_t>(slot)]); });
   out.insert(out.end(), retired_.landmarks().begin(), retired_.landmarks().end());
   std::sort(out.begin(), out.end(),
             [](const MapLandmark& a, const MapLandmark& b) { return a.id < b.id; });

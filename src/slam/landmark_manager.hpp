@@ -15,16 +15,18 @@
 // holds a slot: record, view and patch (about 0.7 kB with the default patch). A landmark
 // retired for good (retire()) frees its slot for the next new landmark and goes to the
 // RetiredLandmarkMap (at most one per voxel of voxel_m, about 0.2 kB each), so memory is bounded
-// by the state size, the anchors and the volume the map covers, not by the flight time; what
-// grows per landmark ever created is the id -> slot table, 4 bytes each (ids are EkfSlam's:
-// dense, never reused). Slots and the retired map are preallocated for `reserve_landmarks`;
-// beyond that they grow by doubling (one allocation per doubling, none per frame in between).
+// by the state size, the anchors and the volume the map covers, not by the flight time (the
+// id -> slot table is a hash map of the ids holding a slot: ids are EkfSlam's, handed out for
+// ever, but only those in the state or anchored are in it). Slots, the id table and the retired
+// map are preallocated for `reserve_landmarks`; beyond that they grow by doubling (one
+// allocation per doubling, none per frame in between).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <vector>
 
 #include "core/image.hpp"
+#include "slam/id_slot_map.hpp"
 #include "slam/map_landmark.hpp"
 #include "slam/retired_landmark_map.hpp"
 
@@ -69,8 +71,7 @@ class LandmarkManager {
   const MapLandmark& info(int id) const { return info_[slotOf(id)]; }
   // Whether `id` holds a slot: in the state, or anchored.
   bool contains(int id) const {
-    return id >= 0 && id < static_cast<int>(slot_of_id_.size()) &&
-           slot_of_id_[static_cast<std::size_t>(id)] >= 0;
+    return slot_of_id_.contains(id);
   }
   // Landmark `id` (holding a slot, its record up to date) has left the filter state: an anchored
   // one keeps its slot (inactive); any other goes to the retired map and frees its slot.
@@ -87,13 +88,13 @@ class LandmarkManager {
     Eigen::Vector3d p_cam;
   };
   std::size_t slotOf(int id) const {
-    return static_cast<std::size_t>(slot_of_id_[static_cast<std::size_t>(id)]);
+    return static_cast<std::size_t>(slot_of_id_.find(id));
   }
   std::size_t patchBytes() const {
     return static_cast<std::size_t>((2 * big_ + 1) * (2 * big_ + 1));
   }
   int h_, big_;
-  std::vector<int> slot_of_id_;        // by id: slot, -1 never registered or retired for good
+  IdSlotMap slot_of_id_;               // slot of each id holding one (in the state or anchored)
   std::vector<int> free_slots_;        // slots to reuse, the last freed first
   int slots_used_ = 0;
   std::vector<MapLandmark> info_;      // by slot

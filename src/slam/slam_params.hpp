@@ -32,9 +32,9 @@ struct SlamSystemParams {
   int retire_unseen_frames = 2;       // a landmark unseen for fewer frames is never retired
   double lost_rot_sigma_rad = 0.035;  // prediction covariance when the VME fails
   double lost_trans_sigma_m = 0.5;
-  int map_reserve = 4096;  // landmarks ever initialised (in the state or retired) whose map
-                           // storage is preallocated (about 0.7 kB each), >= ekf.max_landmarks;
-                           // beyond it the storage grows by doubling
+  int map_reserve = 4096;  // landmarks held at once (in the state, anchored, or in the retired
+                           // map) whose storage is preallocated (about 0.7 kB each),
+                           // >= ekf.max_landmarks; beyond it the storage grows by doubling
   // A landmark retired from the state for good is kept in the map at most one per cubic voxel
   // of this side (the best localised), m, > 0: the map is bounded by the volume it covers, not
   // by the flight time (slam/retired_landmark_map.hpp).

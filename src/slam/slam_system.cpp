@@ -55,7 +55,6 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
   if (init_status_) init_status_ = landmark_row_matcher_.initStatus();
   cell_count_.resize(static_cast<std::size_t>(params.grid_cols * params.grid_rows));
   if (!init_status_) return;
-  ekf_.reserveIds(params.map_reserve);
   const std::size_t lm = static_cast<std::size_t>(params.ekf.max_landmarks);
   const std::size_t n_obs = static_cast<std::size_t>(params.max_observations);
   preds_.reserve(lm);

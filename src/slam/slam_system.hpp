@@ -49,8 +49,8 @@
 //     is mostly the error the current pose shares.
 // Memory: every per-frame buffer is a member sized in the constructor (or grown once to the
 // frame's stereo point count); the map's bookkeeping is preallocated for map_reserve landmarks.
-// Once warm, a frame allocates nothing while fewer than map_reserve landmarks have ever been
-// initialised.
+// Once warm, a frame allocates nothing while the map holds fewer than map_reserve landmarks
+// (in the state, anchored or retired; the retired map is bounded by the volume flown over).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
