@@ -23,6 +23,7 @@
 
 #include "cli_helpers.hpp"
 #include "command_flood.hpp"
+#include "sanitizer_time_scale.hpp"
 #include "drivers/lcm/lcm_messages.hpp"
 #include "drivers/lcm/lcm_transport.hpp"
 #include "svslam_lcm/command_status_t.hpp"
@@ -300,10 +301,14 @@ TEST(LcmPipeline, InnerStalledStageIsOnTheStatsChannel) {
       fs::temp_directory_path() / ("svslam_lcmstall_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const fs::path cfg = dir / "stall.yaml";
-  std::ofstream(cfg) << "service: {stall_timeout_s: 1.0}\n"
-                        "lcm: {stats_period_s: 0.25}\nmap: {enabled: false}\n"
-                        "pipeline:\n  fault: {stall_stage: estimator, stall_frame: 20, "
-                        "stall_ms: 2500}\n";
+  // 1 s and 2.5 s in a release build; a sanitizer build scales both (its ordinary frames can
+  // take over a second).
+  const double timeout_s = 1.0 * test::kSanitizerTimeScale;
+  const double stall_ms = 2500.0 * test::kSanitizerTimeScale;
+  std::ofstream(cfg) << "service: {stall_timeout_s: " << timeout_s << "}\n"
+                     << "lcm: {stats_period_s: 0.25}\nmap: {enabled: false}\n"
+                     << "pipeline:\n  fault: {stall_stage: estimator, stall_frame: 20, "
+                     << "stall_ms: " << static_cast<int>(stall_ms) << "}\n";
   LcmParams p;
   p.url = kUrl;
   auto link = LcmLink::open(p);
@@ -331,7 +336,7 @@ TEST(LcmPipeline, InnerStalledStageIsOnTheStatsChannel) {
   for (const StatsReport& r : sink.got) {
     if (r.stalled_stage.empty()) continue;
     EXPECT_EQ(r.stalled_stage, "estimator");
-    EXPECT_GT(r.stalled_ms, 1000.0);
+    EXPECT_GT(r.stalled_ms, timeout_s * 1e3);
     ++naming;
     if (frames_out_during >= 0 && r.frames_out != frames_out_during) same_frames_out = false;
     frames_out_during = r.frames_out;
@@ -345,7 +350,7 @@ TEST(LcmPipeline, InnerStalledStageIsOnTheStatsChannel) {
   ASSERT_EQ(last.stalls.size(), 1u);
   EXPECT_EQ(last.stalls[0].stage, "estimator");
   EXPECT_EQ(last.stalls[0].count, 1);
-  EXPECT_GE(last.stalls[0].longest_ms, 2500.0);
+  EXPECT_GE(last.stalls[0].longest_ms, stall_ms);
   fs::remove_all(dir);
 }
 
@@ -533,12 +538,18 @@ TEST(LcmPipeline, InnerCommandFloodIsCountedAndHarmless) {
   // and the gate keeps accepting through the flood.
   EXPECT_LE(flood_answers, 20 + static_cast<std::int64_t>(20 * sent.seconds * 1.1) + 1);
   EXPECT_GE(flood_answers, static_cast<std::int64_t>(20 * sent.seconds * 0.5));
-  // No frame lost at 10 Hz: every frame captured was published.
-  EXPECT_EQ(jsonCount(stats, "frames_dropped"), 0) << stats;
-  EXPECT_EQ(jsonCount(stats, "frames_captured"), jsonCount(stats, "frames_published")) << stats;
+  // No frame lost at 10 Hz: every frame captured was published. A sanitizer build cannot keep
+  // 10 Hz with or without a flood (ThreadSanitizer: about 2 frames/s), so only the release
+  // build's run of this test checks it.
+  if (!test::kSanitized) {
+    EXPECT_EQ(jsonCount(stats, "frames_dropped"), 0) << stats;
+    EXPECT_EQ(jsonCount(stats, "frames_captured"), jsonCount(stats, "frames_published"))
+        << stats;
+  }
   // Frames kept flowing through the 3-s flood (at 10 Hz on an idle machine about 60; the
-  // bound is low because a loaded CI machine renders the synthetic source at 3-4 Hz).
-  EXPECT_GE(jsonCount(stats, "frames_published"), 10) << stats;
+  // bound is low because a loaded CI machine renders the synthetic source at 3-4 Hz, and a
+  // ThreadSanitizer build at about 2).
+  EXPECT_GE(jsonCount(stats, "frames_published"), test::kSanitized ? 5 : 10) << stats;
   // The refused ones are logged at most about once a second, never with the token.
   EXPECT_LE(countLines(log, "LCM command(s) ("), 12) << log;
   EXPECT_EQ(log.find(kToken), std::string::npos);
