@@ -14,6 +14,8 @@ void RunSummary::add(int frame, const SlamFrameResult& sr) {
     sum_observed += sr.observed;
     sum_reperceived += sr.reperceived;
     sum_gated += sr.gated;
+    sum_nis += sr.nis_sum;
+    nis_count += sr.nis_count;
     sum_visible += sr.predicted_visible;
     sum_no_match += sr.search_no_match;
     sum_no_stereo += sr.search_no_stereo;
@@ -27,6 +29,10 @@ void RunSummary::add(int frame, const SlamFrameResult& sr) {
   ++frames;
   if (r.tracked) {
     ++tracked;
+    if (r.inliers > 0) {  // a motion was estimated (not the first frame)
+      sum_motion_m2 += r.motion_rms_mahalanobis * r.motion_rms_mahalanobis;
+      ++motion_frames;
+    }
   } else {
     ++failure_counts[r.failure];
     if (failures.size() < 100) failures.emplace_back(frame, r.failure);
@@ -77,6 +83,12 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
       .add("mean_stereo_recovered", s.sum_recovered / n, 1)
       .add("mean_temporal_matches", s.sum_matches / n, 1)
       .add("mean_motion_inliers", s.sum_inliers / n, 1)
+      // Mean over the estimated motions of the inliers' squared Mahalanobis residual per
+      // dof: 1 when the 3D point covariances fit the data (a little less after the outlier loop)
+      .add("motion_residual_per_dof",
+           s.motion_frames > 0 ? s.sum_motion_m2 / (3.0 * static_cast<double>(s.motion_frames))
+                               : 0.0,
+           3)
       .add("threads", cfg.threads)
       .add("dense_stereo", cfg.odometry.dense)
       .add("seed", static_cast<std::int64_t>(cfg.seed))
@@ -91,6 +103,9 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
         .add("mean_landmarks_observed", s.sum_observed / n, 1)
         .add("mean_landmarks_reperceived", s.sum_reperceived / n, 2)
         .add("mean_observations_gated", s.sum_gated / n, 2)
+        // 1 when the observation noise and the state covariance match the innovations
+        .add("observation_nis_per_dof",
+             s.nis_count > 0 ? s.sum_nis / (3.0 * static_cast<double>(s.nis_count)) : 0.0, 3)
         .add("mean_landmarks_predicted_visible", s.sum_visible / n, 1)
         .add("mean_landmark_search_no_match", s.sum_no_match / n, 2)
         .add("mean_landmark_search_no_stereo", s.sum_no_stereo / n, 2)

@@ -1,5 +1,6 @@
 #pragma once
 // What `svslam run` accumulates over the frames and writes to stats.json.
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
@@ -23,6 +24,10 @@ struct RunSummary {
   double sum_recovered = 0, sum_continuity_rejected = 0;
   // Landmark map (ekf mode; zero otherwise).
   double sum_observed = 0, sum_reperceived = 0, sum_gated = 0, sum_in_state = 0;
+  double sum_motion_m2 = 0;    // squared motion_rms_mahalanobis of the estimated motions
+  int motion_frames = 0;      // frames with an estimated motion
+  double sum_nis = 0;         // d^2 of the accepted landmark observations
+  std::int64_t nis_count = 0;  // accepted landmark observations
   double sum_visible = 0, sum_no_match = 0, sum_no_stereo = 0;
   int max_in_state = 0, landmarks_in_map = 0, added = 0, retired = 0, restored = 0;
   // Frames of the recording the source left out (kitti: one side missing) and their names.

@@ -139,6 +139,7 @@ Status StereoOdometry::estimateMotion(const std::vector<std::uint8_t>* exclude,
       T_cur_prev = vm.T_cur_prev;
       out.covariance = vm.covariance;
       out.inliers = vm.used;
+      out.motion_rms_mahalanobis = vm.rms_mahalanobis;
     }
     last_motion_ = T_cur_prev;
     T_first_cam_ = T_first_cam_ * T_cur_prev.inverse();

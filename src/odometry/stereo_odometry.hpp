@@ -45,6 +45,9 @@ struct OdometryFrameResult {
   int stereo_points = 0;
   int temporal_matches = 0;
   int inliers = 0;
+  // RMS over the inliers of the motion's residual Mahalanobis distance (VisualMotionResult):
+  // about sqrt(3) when the point covariances match the data, larger when they are too small.
+  double motion_rms_mahalanobis = 0;
   bool retried = false;
   int rois = 0;             // ROI tracking: cluster regions used in this frame
   int roi_dropped = 0;      // corners outside every ROI and not in an unknown cell

@@ -38,6 +38,11 @@ struct SlamFrameResult {
   int search_no_match = 0;    // ... not found in the left image (ZNCC)
   int search_no_stereo = 0;   // ... found, but not in the right image
   int gated = 0;              // observations rejected by the chi-square gate
+  // Innovation statistics of the accepted observations: the sum of their normalised innovation
+  // squared d^2 = nu^T S^-1 nu (3 dof each; a consistent filter averages 3 per observation,
+  // a little less after the gate) and their number.
+  double nis_sum = 0;
+  int nis_count = 0;
   int added = 0;
   int retired = 0;
   int restored = 0;  // retired anchored landmarks put back into the state

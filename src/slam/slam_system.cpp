@@ -147,6 +147,8 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
           ++out.gated;
           continue;
         }
+        out.nis_sum += results_[i].mahalanobis_d2;
+        ++out.nis_count;
         landmarks_.observed(obs_[i].id, frame_);
         landmark_uv_.push_back(obs_uv_[i]);
       }

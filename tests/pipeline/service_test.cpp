@@ -278,11 +278,28 @@ void expectStallReported(Service& t, int fd, const fs::path& dir, const std::str
   ASSERT_EQ(rc, 0) << err;
   std::string all;
   for (const Note& n : notes) all += std::to_string(n.t_s) + " " + n.text + "\n";
-  const int stalled = findNote(notes, "STATUS=stalled: stage " + stage + " working on one frame");
+  // The stall episodes: a "stalled" note and the next recovery note of the stage. The injected
+  // stall is the longest; a release build has exactly that one, a sanitizer build on loaded
+  // cores may also have ordinary frames slower than its (scaled) timeout.
+  const std::string stalled_text = "STATUS=stalled: stage " + stage + " working on one frame";
+  int stalled = -1, recovered = -1, episodes = 0;
+  for (int i = findNote(notes, stalled_text); i >= 0; i = findNote(notes, stalled_text, i + 1)) {
+    const int r = findNote(notes, "STATUS=tracking; stage " + stage + " stalled ", i);
+    if (r < 0) break;
+    ++episodes;
+    const auto gap = [&](int from, int to) {
+      return notes[static_cast<std::size_t>(to)].t_s - notes[static_cast<std::size_t>(from)].t_s;
+    };
+    if (stalled < 0 || gap(i, r) > gap(stalled, recovered)) {
+      stalled = i;
+      recovered = r;
+    }
+    i = r;
+  }
   ASSERT_GE(stalled, 0) << all << err;
-  const int recovered =
-      findNote(notes, "STATUS=tracking; stage " + stage + " stalled 1 time(s)", stalled);
-  ASSERT_GT(recovered, stalled) << all << err;
+  if (!svslam::test::kSanitized) {
+    EXPECT_EQ(episodes, 1) << all;
+  }
   const auto& ns = notes;
   // Reported once timeout_s passed, recovered when the sleep ends (the check runs every 100 ms).
   EXPECT_GE(ns[static_cast<std::size_t>(recovered)].t_s - ns[static_cast<std::size_t>(stalled)].t_s,
@@ -300,11 +317,20 @@ void expectStallReported(Service& t, int fd, const fs::path& dir, const std::str
   const std::string stats = slurp(dir / "out" / "stats.json");
   char timeout[32];
   std::snprintf(timeout, sizeof timeout, "%.3f", timeout_s);
-  const std::string named = std::string(R"("stalls": {"timeout_s": )") + timeout +
-                            R"(, "count": 1, "stages": [{"stage": ")" + stage +
-                            R"(", "count": 1, "longest_ms": )";
-  ASSERT_NE(stats.find(named), std::string::npos) << stats;
-  const double longest = numberAfter(stats, named);
+  const std::string header = std::string(R"("stalls": {"timeout_s": )") + timeout + R"(, "count": )";
+  ASSERT_NE(stats.find(header), std::string::npos) << stats;
+  const std::string entry = R"({"stage": ")" + stage + R"(", "count": )";
+  ASSERT_NE(stats.find(entry), std::string::npos) << stats;
+  const double stage_count = numberAfter(stats, entry);
+  const std::string longest_key =
+      entry + std::to_string(static_cast<int>(stage_count)) + R"(, "longest_ms": )";
+  const double longest = numberAfter(stats, longest_key);
+  if (!svslam::test::kSanitized) {  // that stall and nothing else
+    EXPECT_EQ(numberAfter(stats, header), 1.0) << stats;
+    EXPECT_EQ(stage_count, 1.0) << stats;
+  } else {
+    EXPECT_GE(stage_count, 1.0) << stats;
+  }
   EXPECT_GE(longest, stall_ms) << stats;
   EXPECT_LT(longest, stall_ms + 20000.0) << stats;
 }
