@@ -247,6 +247,13 @@ ConfigSection odometry() {
              "fewer temporal matches: retry with the identity prediction"),
       number("lost_search_radius_px", SVSLAM_FIELD(odometry.lost_search_radius_px), 1, 4000, "px",
              "search radius of the retry and of the first pair (no motion yet)"),
+      flag("repredict", SVSLAM_FIELD(odometry.repredict),
+           "guided re-matching: a RANSAC motion of the matches predicts a second pass when the "
+           "prediction was the identity or poor"),
+      number("repredict_px", SVSLAM_FIELD(odometry.repredict_px), 0.1, 1000, "px",
+             "median distance of the matches from their prediction that makes it poor"),
+      flag("ransac_on_repredict", SVSLAM_FIELD(odometry.ransac_on_repredict),
+           "the motion of a re-predicted or retried frame by seeded RANSAC"),
   };
   return s;
 }

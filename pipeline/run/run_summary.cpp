@@ -41,6 +41,8 @@ void RunSummary::add(int frame, const SlamFrameResult& sr) {
   sum_points += r.stereo_points;
   sum_matches += r.temporal_matches;
   sum_inliers += r.inliers;
+  repredicted += r.repredicted ? 1 : 0;
+  retried += r.retried ? 1 : 0;
   sum_recovered += r.stereo_stats.recovered;
   sum_continuity_rejected += r.stereo_stats.continuity_rejected;
 }
@@ -83,6 +85,8 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
       .add("mean_stereo_recovered", s.sum_recovered / n, 1)
       .add("mean_temporal_matches", s.sum_matches / n, 1)
       .add("mean_motion_inliers", s.sum_inliers / n, 1)
+      .add("frames_repredicted", s.repredicted)
+      .add("frames_retried", s.retried)
       // Mean over the estimated motions of the inliers' squared Mahalanobis residual per
       // dof: 1 when the 3D point covariances fit the data (a little less after the outlier loop)
       .add("motion_residual_per_dof",

@@ -31,6 +31,9 @@ Status StereoOdometryParams::validate() const {
   if (min_matches < 3) return Status::invalidArgument("odometry.min_matches must be >= 3");
   if (!(lost_search_radius_px > 0.0f) || !std::isfinite(lost_search_radius_px))
     return Status::invalidArgument("odometry.lost_search_radius_px must be > 0");
+  if (!(repredict_px > 0.0) || !std::isfinite(repredict_px))
+    return Status::invalidArgument("odometry.repredict_px must be > 0");
+  if (Status s = rotation_alignment.validate(); !s) return s;
   return Status::ok();
 }
 

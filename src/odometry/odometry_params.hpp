@@ -7,6 +7,7 @@
 #include "features/orb_extractor.hpp"
 #include "features/stereo_point_matcher.hpp"
 #include "features/temporal_matcher.hpp"
+#include "motion/rotation_alignment.hpp"
 #include "motion/visual_motion.hpp"
 #include "stereo/dense_stereo.hpp"
 
@@ -41,6 +42,14 @@ struct StereoOdometryParams {
   double max_depth_m = 1e9;       // points farther than this are not used, m, > 0
   int min_matches = 12;           // temporal matches needed before a retry, >= 3
   float lost_search_radius_px = 100.0f;  // retry and first-pair search radius, px, > 0
+  // Re-prediction of the temporal search (stereo_odometry.hpp step 1) when the constant-velocity
+  // prediction is poor: rotation by image alignment, then a seeded RANSAC motion.
+  bool repredict = true;
+  double repredict_px = 6.0;  // median |matched - predicted| that makes a prediction poor, px, > 0
+  RotationAlignmentParams rotation_alignment;
+  // The motion of a frame whose search was re-predicted or retried is estimated with seeded
+  // RANSAC (the other frames follow motion.ransac).
+  bool ransac_on_repredict = true;
   Status validate() const;
 };
 

@@ -6,20 +6,46 @@
 #include <utility>
 
 namespace svslam {
+namespace {
+
+// The motion of the guided re-matching: seeded RANSAC (the first pass may hold many wrong
+// matches), otherwise the estimator's settings.
+VisualMotionParams bootstrapParams(VisualMotionParams p) {
+  p.ransac = true;
+  return p;
+}
+
+// The alignment's levels, the coarsest kept at 8x8 pixels or more for small images.
+RotationAlignmentParams alignmentParams(RotationAlignmentParams p, int width, int height) {
+  while (p.coarsest_level > 1 && ((width >> p.coarsest_level) < 8 || (height >> p.coarsest_level) < 8))
+    --p.coarsest_level;
+  p.finest_level = std::min(p.finest_level, p.coarsest_level);
+  return p;
+}
+
+}  // namespace
 
 StereoOdometry::StereoOdometry(const StereoOdometryParams& params, const StereoCalibration& calib)
     : params_(params),
       calib_(calib),
       temporal_matcher_(params.temporal_match),
-      motion_(params.motion) {
+      motion_(params.motion),
+      bootstrap_motion_(bootstrapParams(params.motion)),
+      rotation_alignment_(alignmentParams(params.rotation_alignment, calib.width, calib.height),
+                          std::max(calib.width, 16), std::max(calib.height, 16)) {
   init_status_ = params.validate();
   if (init_status_) init_status_ = calib.validate();
+  if (init_status_ && params.repredict) init_status_ = params.rotation_alignment.validate();
   if (init_status_) {
     prev_left_.resize(calib.width, calib.height);
     cur_left_.resize(calib.width, calib.height);
     prev_.reserve(2048);
     cur_.reserve(2048);
     matches_.reserve(2048);
+    rematches_.reserve(2048);
+    errors_.reserve(2048);
+    bootstrap_result_.inlier.reserve(2048);
+    starts_.reserve(2);
     pairs_.reserve(2048);
     motion_result_.inlier.reserve(2048);
   }
@@ -92,6 +118,11 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left, const Stereo
                                          matches_, out.temporal_stats, radius,
                                          stereo.has_rois ? &stereo.prev_regions : nullptr);
     if (!s) return s;
+    if (params_.repredict &&
+        (!motion_known_ || static_cast<int>(matches_.size()) < params_.min_matches ||
+         medianPredictionError(last_motion_) > params_.repredict_px)) {
+      if (Status rs = repredict(left, cam, out); !rs) return rs;
+    }
     if (static_cast<int>(matches_.size()) < params_.min_matches) {
       out.retried = true;
       s = temporal_matcher_.process(prev_left_.cview(), prev_, left, cur_,
@@ -103,6 +134,74 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left, const Stereo
   }
   if (observer) observer->stageDone("temporal_match");
   in_frame_ = true;
+  return Status::ok();
+}
+
+double StereoOdometry::medianPredictionError(const Eigen::Isometry3d& T_cur_prev) {
+  const PinholeCamera cam = calib_.leftCamera();
+  errors_.clear();
+  for (const TemporalMatch& m : matches_) {
+    const Eigen::Vector3d X = T_cur_prev * prev_[static_cast<std::size_t>(m.prev)].p_cam;
+    double u = 0.0, v = 0.0;
+    if (!cam.project(X.x(), X.y(), X.z(), u, v)) continue;
+    const TrackPoint& c = cur_[static_cast<std::size_t>(m.cur)];
+    errors_.push_back(std::hypot(u - c.u_px, v - c.v_px));
+  }
+  if (errors_.empty()) return 0.0;
+  const auto mid = errors_.begin() + static_cast<std::ptrdiff_t>(errors_.size() / 2);
+  std::nth_element(errors_.begin(), mid, errors_.end());
+  return *mid;
+}
+
+int StereoOdometry::bootstrap(const std::vector<TemporalMatch>& matches) {
+  pairs_.clear();
+  for (const TemporalMatch& m : matches) {
+    const TrackPoint& p = prev_[static_cast<std::size_t>(m.prev)];
+    const TrackPoint& c = cur_[static_cast<std::size_t>(m.cur)];
+    pairs_.push_back({p.p_cam, p.cov, c.p_cam, c.cov});
+  }
+  if (static_cast<int>(pairs_.size()) < params_.motion.min_inliers) return 0;
+  if (!bootstrap_motion_.process(pairs_, bootstrap_result_)) return 0;
+  if (!bootstrap_result_.T_cur_prev.matrix().allFinite()) return 0;
+  return bootstrap_result_.used;
+}
+
+Status StereoOdometry::repredict(ImageView<const std::uint8_t> left, const PinholeCamera& cam,
+                                 OdometryFrameResult& out) {
+  // (a) Rotation-aware prediction: the turn by image alignment from the constant-velocity
+  // rotation and from none, with the constant-velocity translation, searched as widely as a
+  // retry (a close scene's parallax is not in the rotation). The ROI regions were placed with
+  // the poor prediction, so they are not used by the second passes.
+  starts_.assign({last_motion_.linear(), Eigen::Matrix3d::Identity()});
+  RotationAlignmentResult rot;
+  // (An image under 16x16 pixels has no alignment: process() then fails and (b) alone runs.)
+  if (rotation_alignment_.process(prev_left_.cview(), left, cam, starts_, rot)) {
+    Eigen::Isometry3d T_pred = last_motion_;
+    T_pred.linear() = rot.R_cur_prev;
+    if (!motion_known_) T_pred.translation().setZero();
+    Status s = temporal_matcher_.process(prev_left_.cview(), prev_, left, cur_, T_pred, cam,
+                                         rematches_, rematch_stats_,
+                                         params_.lost_search_radius_px, nullptr);
+    if (!s) return s;
+    if (rematches_.size() > matches_.size()) {
+      matches_.swap(rematches_);
+      out.temporal_stats = rematch_stats_;
+      out.repredicted = true;
+    }
+  }
+  // (b) Guided re-matching around the seeded RANSAC motion of the matches, kept when the
+  // RANSAC motion of the new matches has at least as many inliers.
+  const int inliers = bootstrap(matches_);
+  if (inliers == 0) return Status::ok();
+  const Eigen::Isometry3d T_boot = bootstrap_result_.T_cur_prev;
+  Status s = temporal_matcher_.process(prev_left_.cview(), prev_, left, cur_, T_boot, cam,
+                                       rematches_, rematch_stats_, 0.0f, nullptr);
+  if (!s) return s;
+  if (static_cast<int>(rematches_.size()) > inliers && bootstrap(rematches_) >= inliers) {
+    matches_.swap(rematches_);
+    out.temporal_stats = rematch_stats_;
+    out.repredicted = true;
+  }
   return Status::ok();
 }
 
@@ -129,7 +228,11 @@ Status StereoOdometry::estimateMotion(const std::vector<std::uint8_t>* exclude,
       out.failure.assign("too few temporal matches (")
           .append(std::to_string(pairs_.size()))
           .append(")");
-    } else if (Status ms = motion_.process(pairs_, vm); !ms) {
+    } else if (Status ms = (params_.ransac_on_repredict && (out.repredicted || out.retried)
+                                ? bootstrap_motion_
+                                : motion_)
+                               .process(pairs_, vm);
+               !ms) {
       out.failure.assign("motion estimation: ").append(ms.message());
     } else if (!vm.T_cur_prev.matrix().allFinite() || !vm.covariance.allFinite()) {
       out.failure.assign("motion estimation: non-finite result");

@@ -10,6 +10,15 @@
 //     prediction and lost_search_radius_px. Before any motion has been measured (the first
 //     pair, or after resetTracking) the identity is searched with lost_search_radius_px
 //     straight away;
+//     Re-prediction (params.repredict): when that prediction was the identity (first pair),
+//     gave fewer than min_matches, or the median distance of the matched points from their
+//     predicted positions exceeds repredict_px (a turn the constant velocity did not foresee):
+//     (a) the rotation by coarse image alignment (motion/rotation_alignment.hpp) with the
+//     constant-velocity translation predicts a second pass within lost_search_radius_px, kept
+//     when it matches more; (b) a seeded RANSAC motion of the matches predicts a third pass at
+//     the normal radius, kept when its own RANSAC motion has at least as many inliers. Only
+//     then, still below min_matches, the retry. The motion of a re-predicted or retried frame
+//     is estimated with seeded RANSAC (ransac_on_repredict);
 //  2. visual motion estimation (motion/visual_motion.hpp) -> T_cur_prev and its covariance.
 // Poses: T_first_cam = T_first_prev * T_cur_prev^-1 (left camera in the first left camera's
 // frame, x right, y down, z forward). A frame whose motion cannot be estimated keeps the
@@ -27,6 +36,7 @@
 #include "core/stage_observer.hpp"
 #include "core/status.hpp"
 #include "features/temporal_matcher.hpp"
+#include "motion/rotation_alignment.hpp"
 #include "motion/visual_motion.hpp"
 #include "odometry/odometry_params.hpp"
 #include "odometry/stereo_stage.hpp"
@@ -49,6 +59,7 @@ struct OdometryFrameResult {
   // about sqrt(3) when the point covariances match the data, larger when they are too small.
   double motion_rms_mahalanobis = 0;
   bool retried = false;
+  bool repredicted = false;  // the matches are those of the guided second pass
   int rois = 0;             // ROI tracking: cluster regions used in this frame
   int roi_dropped = 0;      // corners outside every ROI and not in an unknown cell
   int unknown_corners = 0;  // corners kept in unknown cells
@@ -98,6 +109,12 @@ class StereoOdometry {
   void resetTracking();
 
  private:
+  // Median over matches_ of |projected T_cur_prev * X_prev - matched point|, px (0 if none).
+  double medianPredictionError(const Eigen::Isometry3d& T_cur_prev);
+  Status repredict(ImageView<const std::uint8_t> left, const PinholeCamera& cam,
+                   OdometryFrameResult& out);
+  // Seeded RANSAC motion of `matches` into bootstrap_result_; its inlier count (0: failed).
+  int bootstrap(const std::vector<TemporalMatch>& matches);
   StereoOdometryParams params_;
   StereoCalibration calib_;
   Status init_status_;
@@ -105,6 +122,13 @@ class StereoOdometry {
   TemporalMatcher temporal_matcher_;
   VisualMotion motion_;
   VisualMotionResult motion_result_;  // reused every frame (its inlier flags keep capacity)
+  VisualMotion bootstrap_motion_;     // RANSAC motion of the guided re-matching
+  VisualMotionResult bootstrap_result_;
+  std::vector<TemporalMatch> rematches_;
+  TemporalMatchStats rematch_stats_;
+  std::vector<double> errors_;  // scratch of medianPredictionError
+  RotationAlignment rotation_alignment_;
+  std::vector<Eigen::Matrix3d> starts_;
   std::vector<TrackPoint> prev_, cur_;
   std::vector<TemporalMatch> matches_;
   std::vector<PointPair> pairs_;

@@ -156,6 +156,16 @@ TEST(RunConfig, ExampleConfigLoadsAtDefaults) {
   EXPECT_EQ(c.odometry.dense, d.odometry.dense);
 }
 
+TEST(RunConfig, RealCameraConfigLoads) {
+  // config/real_camera.yaml (docs/odometry.md): the ORB front end with RANSAC motions.
+  RunConfig c;
+  const std::string path = std::string(SVSLAM_SOURCE_DIR) + "/config/real_camera.yaml";
+  ASSERT_TRUE(svslam::config::loadRunConfig(path, c).isOk());
+  EXPECT_EQ(c.odometry.detector, svslam::PointDetector::kOrb);
+  EXPECT_TRUE(c.odometry.motion.ransac);
+  EXPECT_TRUE(c.odometry.repredict);
+}
+
 TEST(RunConfig, ExampleConfigChangesNoDefault) {
   // Every key of config/svslam.yaml must hold the code's default (the file documents them): a
   // value that differs (stereo_match.refine_iterations was 6 against a default of 10) is named.
