@@ -75,7 +75,7 @@ class WireWalker {
 };
 
 bool scan(WireWalker& w, const svslam_lcm::pose_t*) {
-  return w.skip(8 + 24) && w.str() && w.skip(24 + 32 + 288 + 1) && w.atEnd();
+  return w.skip(8 + 24) && w.str() && w.skip(24 + 32 + 288 + 1 + 4 + 8 + 8 + 4 + 1) && w.atEnd();
 }
 bool scan(WireWalker& w, const svslam_lcm::stats_t*) {
   std::int32_t ns = 0, nq = 0;
@@ -140,6 +140,18 @@ Result<TimeNs> fromUtime(std::int64_t utime) {
   return utime * kNsPerUs;
 }
 
+namespace {
+// The health fields of a pose: counts >= 0, statistics finite and >= 0.
+Status checkHealth(const PoseReport& r, const std::string& what) {
+  if (r.motion_inliers < 0 || r.landmarks_observed < 0)
+    return Status::invalidArgument(what + ": negative inlier or landmark count");
+  if (!(std::isfinite(r.motion_residual_per_dof) && r.motion_residual_per_dof >= 0.0) ||
+      !(std::isfinite(r.observation_nis_per_dof) && r.observation_nis_per_dof >= 0.0))
+    return Status::invalidArgument(what + ": health statistics must be finite and >= 0");
+  return Status::ok();
+}
+}  // namespace
+
 Result<svslam_lcm::pose_t> toLcm(const PoseReport& r) {
   const Eigen::Matrix3d R = r.T_world_cam.linear();
   const Eigen::Vector3d p = r.T_world_cam.translation();
@@ -162,6 +174,12 @@ Result<svslam_lcm::pose_t> toLcm(const PoseReport& r) {
   m.orientation[3] = q.z();
   for (int k = 0; k < 36; ++k) m.covariance[k] = r.cov(k / 6, k % 6);
   m.status = static_cast<std::int8_t>(r.status);
+  if (Status s = checkHealth(r, "pose " + std::to_string(r.seq)); !s) return s;
+  m.motion_inliers = r.motion_inliers;
+  m.motion_residual_per_dof = r.motion_residual_per_dof;
+  m.observation_nis_per_dof = r.observation_nis_per_dof;
+  m.landmarks_observed = r.landmarks_observed;
+  m.search = static_cast<std::int8_t>(r.search);
   return m;
 }
 
@@ -191,6 +209,14 @@ Result<PoseReport> fromLcm(const svslam_lcm::pose_t& m) {
   if (m.status < 0 || m.status > 2)
     return Status::invalidArgument(what + ": unknown status " + std::to_string(m.status));
   r.status = static_cast<TrackingStatus>(m.status);
+  if (m.search < 0 || m.search > 2)
+    return Status::invalidArgument(what + ": unknown search " + std::to_string(m.search));
+  r.motion_inliers = m.motion_inliers;
+  r.motion_residual_per_dof = m.motion_residual_per_dof;
+  r.observation_nis_per_dof = m.observation_nis_per_dof;
+  r.landmarks_observed = m.landmarks_observed;
+  r.search = static_cast<SearchKind>(m.search);
+  if (Status s = checkHealth(r, what); !s) return s;
   return r;
 }
 

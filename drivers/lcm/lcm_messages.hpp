@@ -38,6 +38,8 @@ enum class TrackingStatus : int {
   kInitializing = 2,  // no map yet
 };
 
+enum class SearchKind : std::int8_t { kPredicted = 0, kRepredicted = 1, kRetried = 2 };
+
 struct PoseReport {
   TimeNs t_ns = 0;          // capture time of the frame
   TimeNs publish_t_ns = 0;  // time of publication (same clock as t_ns when live)
@@ -47,6 +49,12 @@ struct PoseReport {
   // 6x6 covariance [rot (rad), trans (m)], right-multiplied error (see top of file).
   Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Zero();
   TrackingStatus status = TrackingStatus::kTracking;
+  // Health (lcm/pose_t.lcm): finite and >= 0.
+  int motion_inliers = 0;
+  double motion_residual_per_dof = 0.0;
+  double observation_nis_per_dof = 0.0;
+  int landmarks_observed = 0;
+  SearchKind search = SearchKind::kPredicted;
 };
 
 struct StageLatency {

@@ -65,7 +65,14 @@ ListenLine poseLine(const std::string& channel, const std::uint8_t* d, std::size
       .addRaw("position", jsonArray(m.position, 3, "%.9g"))
       .addRaw("orientation", jsonArray(m.orientation, 4, "%.9g"))
       .addRaw("cov_diag", jsonArray(diag, 6, "%.6g"))
-      .add("status", statusName(r->status));
+      .add("status", statusName(r->status))
+      .add("motion_inliers", r->motion_inliers)
+      .add("motion_residual_per_dof", r->motion_residual_per_dof, 3)
+      .add("observation_nis_per_dof", r->observation_nis_per_dof, 3)
+      .add("landmarks_observed", r->landmarks_observed)
+      .add("search", r->search == drivers::SearchKind::kRepredicted ? "repredicted"
+                     : r->search == drivers::SearchKind::kRetried   ? "retried"
+                                                                     : "predicted");
   return done(ListenType::kPose, j);
 }
 

@@ -71,6 +71,16 @@ Status RunPublisher::publish(const rt::FrameSlot& slot) {
   p.status = sr.odometry.frame == 0 ? drivers::TrackingStatus::kInitializing
              : sr.odometry.tracked  ? drivers::TrackingStatus::kTracking
                                     : drivers::TrackingStatus::kLost;
+  p.motion_inliers = sr.odometry.inliers;
+  p.motion_residual_per_dof =
+      sr.odometry.inliers > 0
+          ? sr.odometry.motion_rms_mahalanobis * sr.odometry.motion_rms_mahalanobis / 3.0
+          : 0.0;
+  p.observation_nis_per_dof = sr.nis_count > 0 ? sr.nis_sum / (3.0 * sr.nis_count) : 0.0;
+  p.landmarks_observed = sr.nis_count;
+  p.search = sr.odometry.retried       ? drivers::SearchKind::kRetried
+             : sr.odometry.repredicted ? drivers::SearchKind::kRepredicted
+                                       : drivers::SearchKind::kPredicted;
   // A pose that cannot be published (non-finite) is an error of this frame, not of the run:
   // it is skipped on LCM (the files keep the line) and counted by the link.
   (void)lcm_->publishPose(p);

@@ -137,6 +137,10 @@ TEST(LcmPipeline, InnerListenerGetsEveryPose) {
     EXPECT_NE(poses.find("\"seq\": " + std::to_string(i) + ","), std::string::npos) << i;
   EXPECT_EQ(countLines(poses, "\"cov_diag\""), kFrames);
   EXPECT_EQ(poses.find("null"), std::string::npos);  // every covariance finite
+  // Health: a measured motion (tracking) has inliers, the others none.
+  const int tracking = countLines(poses, "\"status\": \"tracking\"");
+  EXPECT_GT(tracking, 0) << poses;
+  EXPECT_EQ(countLines(poses, "\"motion_inliers\": 0,"), kFrames - tracking) << poses;
   fs::remove_all(dir);
 }
 

@@ -71,6 +71,10 @@ void writeLog(const std::string& path) {
   pose.publish_t_ns = pose.t_ns + 5'000'000;
   pose.T_world_cam.translation() = Eigen::Vector3d(1.0, 2.0, 3.0);
   for (int k = 0; k < 6; ++k) pose.cov(k, k) = 1e-4;
+  pose.motion_inliers = 76;
+  pose.motion_residual_per_dof = 0.5;
+  pose.landmarks_observed = 6;
+  pose.search = drivers::SearchKind::kRetried;
   ASSERT_TRUE(l.publishPose(pose).isOk());
   drivers::StatsReport stats;
   stats.t_ns = 2'000'000'000;
@@ -152,6 +156,11 @@ TEST_F(ListenTest, PrintsEveryTypeOnceWithItsChannel) {
                             R"({"type": "stereo_image", "channel": "CAM_FRONT")"};
   for (const char* e : expected) EXPECT_EQ(countOf(out_, e), 1) << e << "\n" << out_;
   EXPECT_NE(out_.find(R"("position": [1, 2, 3])"), std::string::npos) << out_;
+  EXPECT_NE(out_.find(R"("motion_inliers": 76, "motion_residual_per_dof": 0.500, )"
+                      R"("observation_nis_per_dof": 0.000, "landmarks_observed": 6, )"
+                      R"("search": "retried"})"),
+            std::string::npos)
+      << out_;
   EXPECT_NE(out_.find(R"("landmarks_in_map": 7, "num_points": 2)"), std::string::npos) << out_;
   EXPECT_NE(out_.find(R"("stalled_stage": "mapper", "stalled_ms": 1500.2, )"
                       R"("stalls": [{"stage": "mapper", "count": 2, "longest_ms": 2500.5}])"),

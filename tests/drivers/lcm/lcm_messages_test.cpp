@@ -33,6 +33,11 @@ PoseReport samplePose() {
   Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Random();
   r.cov = A * A.transpose() * 1e-3;
   r.status = TrackingStatus::kLost;
+  r.motion_inliers = 87;
+  r.motion_residual_per_dof = 0.55;
+  r.observation_nis_per_dof = 0.75;
+  r.landmarks_observed = 23;
+  r.search = SearchKind::kRepredicted;
   return r;
 }
 
@@ -53,6 +58,12 @@ TEST(LcmMessages, PoseRoundTripKeepsPoseCovarianceAndTimes) {
   EXPECT_EQ(back->status, TrackingStatus::kLost);
   EXPECT_TRUE(back->T_world_cam.isApprox(r.T_world_cam, 1e-12));
   EXPECT_EQ(back->cov, r.cov);
+  EXPECT_EQ(m->search, svslam_lcm::pose_t::REPREDICTED);
+  EXPECT_EQ(back->motion_inliers, 87);
+  EXPECT_EQ(back->motion_residual_per_dof, 0.55);
+  EXPECT_EQ(back->observation_nis_per_dof, 0.75);
+  EXPECT_EQ(back->landmarks_observed, 23);
+  EXPECT_EQ(back->search, SearchKind::kRepredicted);
 }
 
 TEST(LcmMessages, PoseRejectsNaNAsymmetryAndBadRotation) {
@@ -92,6 +103,20 @@ TEST(LcmMessages, PoseRejectsNaNAsymmetryAndBadRotation) {
   EXPECT_FALSE(fromLcm(m2).isOk());
   m2 = m;
   m2.frame_id.clear();  // what toLcm refuses to send is refused on receipt (found by fuzzing)
+  auto no_frame_check = m2;
+  m2 = m;
+  m2.search = 3;
+  EXPECT_FALSE(fromLcm(m2).isOk());
+  m2 = m;
+  m2.motion_inliers = -1;
+  EXPECT_FALSE(fromLcm(m2).isOk());
+  m2 = m;
+  m2.observation_nis_per_dof = std::nan("");
+  EXPECT_FALSE(fromLcm(m2).isOk());
+  r = samplePose();
+  r.motion_residual_per_dof = -0.5;
+  EXPECT_FALSE(toLcm(r).isOk());
+  m2 = no_frame_check;
   auto no_frame = fromLcm(m2);
   ASSERT_FALSE(no_frame.isOk());
   EXPECT_NE(no_frame.status().message().find("frame_id"), std::string::npos);
