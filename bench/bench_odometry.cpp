@@ -17,6 +17,7 @@
 #include "drivers/files/opencv_view.hpp"
 #include "drivers/source/stereo_source.hpp"
 #include "frame_reporter.hpp"
+#include "motion/rotation_alignment.hpp"
 #include "odometry/stereo_odometry.hpp"
 #include "odometry/stereo_stage.hpp"
 
@@ -51,13 +52,17 @@ const Sequence& sequence() {
   return s;
 }
 
-void BM_FrontEnd_svslam(benchmark::State& st) {
+// The front end with the library defaults; `repredict` false leaves out the re-prediction of a
+// poor temporal search (docs/odometry.md), for the same-run cost of it.
+void frontEnd(benchmark::State& st, bool repredict) {
   const Sequence& seq = sequence();
   if (seq.frames.empty()) {
     st.SkipWithError(("no KITTI data: " + seq.error).c_str());
     return;
   }
-  const svslam::StereoOdometryParams params;
+  svslam::StereoOdometryParams params;
+  params.repredict = repredict;
+  params.ransac_on_repredict = repredict;
   svslam::StereoStage stage(params, seq.calib);
   svslam::StereoStageOutput stereo;
   svslam::StereoOdometry vo(params, seq.calib);
@@ -77,6 +82,30 @@ void BM_FrontEnd_svslam(benchmark::State& st) {
       100.0 * tracked / (static_cast<double>(st.iterations()) * static_cast<double>(seq.frames.size()));
   st.SetItemsProcessed(static_cast<std::int64_t>(st.iterations() * seq.frames.size()));
 }
+
+void BM_FrontEnd_svslam(benchmark::State& st) { frontEnd(st, true); }
+
+// One rotation alignment of the re-prediction (KITTI frames 0 and 2, the constant-velocity and
+// the identity starts), the cost a re-predicted frame adds before its wide pass.
+void BM_RotationAlignment(benchmark::State& st) {
+  const Sequence& seq = sequence();
+  if (seq.frames.size() < 3) {
+    st.SkipWithError(("no KITTI data: " + seq.error).c_str());
+    return;
+  }
+  const svslam::RotationAlignmentParams params;
+  svslam::RotationAlignment align(params, seq.calib.width, seq.calib.height);
+  const std::vector<Eigen::Matrix3d> starts = {Eigen::Matrix3d::Identity(),
+                                               Eigen::Matrix3d::Identity()};
+  svslam::RotationAlignmentResult out;
+  for (auto _ : st) {
+    (void)align.process(seq.frames[0].left.cview(), seq.frames[2].left.cview(),
+                        seq.calib.leftCamera(), starts, out);
+    benchmark::DoNotOptimize(out.R_cur_prev);
+  }
+}
+BENCHMARK(BM_RotationAlignment)->Unit(benchmark::kMillisecond)->MinTime(1.0);
+void BM_FrontEnd_svslam_no_repredict(benchmark::State& st) { frontEnd(st, false); }
 
 void BM_FrontEnd_opencv_orb(benchmark::State& st) {
   const Sequence& seq = sequence();
@@ -144,6 +173,7 @@ void BM_FrontEnd_opencv_orb(benchmark::State& st) {
 }
 
 BENCHMARK(BM_FrontEnd_svslam)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_FrontEnd_svslam_no_repredict)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_FrontEnd_opencv_orb)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 // Prints per-frame times and the ratio svslam / OpenCV at the end.

@@ -27,8 +27,8 @@ namespace svslam {
 
 struct RotationAlignmentParams {
   int coarsest_level = 4;        // pyramid level where the alignment starts (1/16 size), 1..6
-  int finest_level = 2;          // level where it ends, 0..coarsest_level
-  int iterations = 15;           // Gauss-Newton iterations per level, >= 1
+  int finest_level = 3;          // level where it ends, 0..coarsest_level
+  int iterations = 10;           // Gauss-Newton iterations per level, >= 1
   double huber_grey = 10.0;      // Huber threshold of the residual, grey levels, > 0
   double border_fraction = 0.05; // pixels this close to the border (share of the size) unused
   double search_deg = 12.0;      // half-range of the coarse grid search, deg, >= 0 (0: none)

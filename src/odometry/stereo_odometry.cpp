@@ -175,7 +175,8 @@ Status StereoOdometry::repredict(ImageView<const std::uint8_t> left, const Pinho
   starts_.assign({last_motion_.linear(), Eigen::Matrix3d::Identity()});
   RotationAlignmentResult rot;
   // (An image under 16x16 pixels has no alignment: process() then fails and (b) alone runs.)
-  if (rotation_alignment_.process(prev_left_.cview(), left, cam, starts_, rot)) {
+  // Without a measured motion the first pass already searched widely around the identity.
+  if (motion_known_ && rotation_alignment_.process(prev_left_.cview(), left, cam, starts_, rot)) {
     Eigen::Isometry3d T_pred = last_motion_;
     T_pred.linear() = rot.R_cur_prev;
     if (!motion_known_) T_pred.translation().setZero();
