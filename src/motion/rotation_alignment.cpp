@@ -95,8 +95,10 @@ void RotationAlignment::buildPyramid(ImageView<const std::uint8_t> img,
   }
 }
 
-double RotationAlignment::costAt(int level, const PinholeCamera& camera,
-                                 const Eigen::Matrix3d& R) const {
+double RotationAlignment::accumulate(int level, const PinholeCamera& camera,
+                                     const Eigen::Matrix3d& R, double a, double b,
+                                     Eigen::Matrix<double, 5, 5>* H, Eigen::Matrix<double, 5, 1>* g,
+                                     double& overlap) const {
   const Image<float>& P = prev_pyr_[static_cast<std::size_t>(level)];
   const Image<float>& C = cur_pyr_[static_cast<std::size_t>(level)];
   const PinholeCamera cam = atLevel(camera, level);
@@ -116,63 +118,40 @@ double RotationAlignment::costAt(int level, const PinholeCamera& camera,
       if (!sample(C, cam.fx_px * q.x() / q.z() + cam.cx_px, cam.fy_px * q.y() / q.z() + cam.cy_px,
                   I, gx, gy))
         continue;
-      const double ar = std::abs(I - prow[x]);
-      sum += ar <= k ? 0.5 * ar * ar : k * (ar - 0.5 * k);
+      const double r = a * I + b - prow[x];
+      const double ar = std::abs(r);
+      sum += ar <= k ? 0.5 * r * r : k * (ar - 0.5 * k);
       ++used;
+      if (H == nullptr) continue;
+      // dr/dtheta = a [gx gy] dw/dq (-[q]x)
+      const double iz = 1.0 / q.z();
+      const Eigen::RowVector3d dwdq_u(cam.fx_px * iz, 0.0, -cam.fx_px * q.x() * iz * iz);
+      const Eigen::RowVector3d dwdq_v(0.0, cam.fy_px * iz, -cam.fy_px * q.y() * iz * iz);
+      const Eigen::RowVector3d dIdq = a * (gx * dwdq_u + gy * dwdq_v);
+      Eigen::Matrix3d qx;
+      qx << 0, -q.z(), q.y(), q.z(), 0, -q.x(), -q.y(), q.x(), 0;
+      Eigen::Matrix<double, 1, 5> J;
+      J.head<3>() = -dIdq * qx;
+      J(3) = I;
+      J(4) = 1.0;
+      const double w = ar <= k ? 1.0 : k / ar;  // Huber weight
+      H->noalias() += w * J.transpose() * J;
+      g->noalias() += w * J.transpose() * r;
     }
   }
-  if (used < total * 3 / 10) return std::numeric_limits<double>::infinity();
+  overlap = static_cast<double>(used) / total;
+  if (used < 50) return std::numeric_limits<double>::infinity();
   return sum / used;
 }
 
 double RotationAlignment::alignLevel(int level, const PinholeCamera& camera, Eigen::Matrix3d& R,
                                      double& a, double& b, double& overlap) const {
-  const Image<float>& P = prev_pyr_[static_cast<std::size_t>(level)];
-  const Image<float>& C = cur_pyr_[static_cast<std::size_t>(level)];
-  const PinholeCamera cam = atLevel(camera, level);
-  const int mx = static_cast<int>(params_.border_fraction * P.width()) + 1;
-  const int my = static_cast<int>(params_.border_fraction * P.height()) + 1;
-  const int total = std::max(1, (P.width() - 2 * mx) * (P.height() - 2 * my));
-  const double k = params_.huber_grey;
   double cost = std::numeric_limits<double>::infinity();
   for (int it = 0; it < params_.iterations; ++it) {
     Eigen::Matrix<double, 5, 5> H = Eigen::Matrix<double, 5, 5>::Zero();
     Eigen::Matrix<double, 5, 1> g = Eigen::Matrix<double, 5, 1>::Zero();
-    double sum = 0.0;
-    int used = 0;
-    for (int y = my; y < P.height() - my; ++y) {
-      const float* prow = P.view().row(y);
-      for (int x = mx; x < P.width() - mx; ++x) {
-        const Eigen::Vector3d q =
-            R * Eigen::Vector3d((x - cam.cx_px) / cam.fx_px, (y - cam.cy_px) / cam.fy_px, 1.0);
-        if (!(q.z() > 1e-6)) continue;
-        const double u = cam.fx_px * q.x() / q.z() + cam.cx_px;
-        const double v = cam.fy_px * q.y() / q.z() + cam.cy_px;
-        double I = 0, gx = 0, gy = 0;
-        if (!sample(C, u, v, I, gx, gy)) continue;
-        const double r = a * I + b - prow[x];
-        const double ar = std::abs(r);
-        const double w = ar <= k ? 1.0 : k / ar;
-        sum += ar <= k ? 0.5 * r * r : k * (ar - 0.5 * k);
-        ++used;
-        // dr/dtheta = a [gx gy] dw/dq (-[q]x)
-        const double iz = 1.0 / q.z();
-        const Eigen::RowVector3d dwdq_u(cam.fx_px * iz, 0.0, -cam.fx_px * q.x() * iz * iz);
-        const Eigen::RowVector3d dwdq_v(0.0, cam.fy_px * iz, -cam.fy_px * q.y() * iz * iz);
-        const Eigen::RowVector3d dIdq = a * (gx * dwdq_u + gy * dwdq_v);
-        Eigen::Matrix3d qx;
-        qx << 0, -q.z(), q.y(), q.z(), 0, -q.x(), -q.y(), q.x(), 0;
-        Eigen::Matrix<double, 1, 5> J;
-        J.head<3>() = -dIdq * qx;
-        J(3) = I;
-        J(4) = 1.0;
-        H.noalias() += w * J.transpose() * J;
-        g.noalias() += w * J.transpose() * r;
-      }
-    }
-    overlap = static_cast<double>(used) / total;
-    if (used < 50) return std::numeric_limits<double>::infinity();
-    cost = sum / used;
+    cost = accumulate(level, camera, R, a, b, &H, &g, overlap);
+    if (!std::isfinite(cost)) return cost;
     const Eigen::Matrix<double, 5, 1> dx = H.ldlt().solve(-g);
     if (!dx.allFinite()) return std::numeric_limits<double>::infinity();
     R = expSO3(dx.head<3>()) * R;
@@ -207,7 +186,10 @@ Status RotationAlignment::process(ImageView<const std::uint8_t> prev,
           const Eigen::Matrix3d R =
               expSO3(Eigen::Vector3d(i * params_.step_deg * deg, j * params_.step_deg * deg, 0.0)) *
               R0;
-          const double c = costAt(params_.coarsest_level, camera, R);
+          double overlap = 0.0;
+          double c = accumulate(params_.coarsest_level, camera, R, 1.0, 0.0, nullptr, nullptr,
+                                overlap);
+          if (overlap < 0.3) c = std::numeric_limits<double>::infinity();
           if (c < grid_best) {
             grid_best = c;
             R_best = R;

@@ -49,10 +49,9 @@ struct SphereTexture {
   }
 };
 
-// The image of the camera rotated by R_cam_ref (a ray d of the reference frame is R d in it).
-ImageU8 render(const SphereTexture& tex, const Eigen::Matrix3d& R_cam_ref, double gain,
-               double bias, int w, int h) {
-  const PinholeCamera c = camera();
+// The image of camera c rotated by R_cam_ref (a ray d of the reference frame is R d in it).
+ImageU8 render(const SphereTexture& tex, const PinholeCamera& c, const Eigen::Matrix3d& R_cam_ref,
+               double gain, double bias, int w, int h) {
   ImageU8 img(w, h);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
@@ -74,21 +73,10 @@ TEST(RotationAlignment, RecoversATurnWithABrightnessChange) {
   cam.cx_px = 183.5;
   cam.cy_px = 123.5;
   const SphereTexture tex(7);
-  // render() uses camera(); scale the same way by rendering at half size with its own camera.
-  auto renderHalf = [&](const Eigen::Matrix3d& R, double gain, double bias) {
-    ImageU8 img(w, h);
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        const Eigen::Vector3d ray((x - cam.cx_px) / cam.fx_px, (y - cam.cy_px) / cam.fy_px, 1.0);
-        const double v = gain * tex.at(R.transpose() * ray) + bias;
-        img(x, y) = static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0, 255.0)));
-      }
-    return img;
-  };
   const Eigen::Matrix3d R_prev = Eigen::Matrix3d::Identity();
   const Eigen::Matrix3d R_cur = expSO3(Eigen::Vector3d(-1.7, -7.7, -4.9) * kDeg);
-  const ImageU8 prev = renderHalf(R_prev, 1.0, 0.0);
-  const ImageU8 cur = renderHalf(R_cur, 1.1, -8.0);
+  const ImageU8 prev = render(tex, cam, R_prev, 1.0, 0.0, w, h);
+  const ImageU8 cur = render(tex, cam, R_cur, 1.1, -8.0, w, h);
   RotationAlignmentParams p;
   p.coarsest_level = 3;
   p.finest_level = 1;
@@ -109,8 +97,8 @@ TEST(RotationAlignment, GridFindsATurnFarFromEveryStart) {
   const SphereTexture tex(11);
   const int w = 752, h = 480;
   const Eigen::Matrix3d R_cur = expSO3(Eigen::Vector3d(3.0, 10.0, 1.0) * kDeg);
-  const ImageU8 prev = render(tex, Eigen::Matrix3d::Identity(), 1.0, 0.0, w, h);
-  const ImageU8 cur = render(tex, R_cur, 1.0, 0.0, w, h);
+  const ImageU8 prev = render(tex, camera(), Eigen::Matrix3d::Identity(), 1.0, 0.0, w, h);
+  const ImageU8 cur = render(tex, camera(), R_cur, 1.0, 0.0, w, h);
   RotationAlignmentParams p;
   RotationAlignment align(p, w, h);
   RotationAlignmentResult out;
