@@ -179,7 +179,6 @@ Status StereoOdometry::repredict(ImageView<const std::uint8_t> left, const Pinho
   if (motion_known_ && rotation_alignment_.process(prev_left_.cview(), left, cam, starts_, rot)) {
     Eigen::Isometry3d T_pred = last_motion_;
     T_pred.linear() = rot.R_cur_prev;
-    if (!motion_known_) T_pred.translation().setZero();
     Status s = temporal_matcher_.process(prev_left_.cview(), prev_, left, cur_, T_pred, cam,
                                          rematches_, rematch_stats_,
                                          params_.lost_search_radius_px, nullptr);
