@@ -84,6 +84,7 @@ void frontEnd(benchmark::State& st, bool repredict) {
 }
 
 void BM_FrontEnd_svslam(benchmark::State& st) { frontEnd(st, true); }
+void BM_FrontEnd_svslam_no_repredict(benchmark::State& st) { frontEnd(st, false); }
 
 // One rotation alignment of the re-prediction (KITTI frames 0 and 2, the constant-velocity and
 // the identity starts), the cost a re-predicted frame adds before its wide pass.
@@ -105,7 +106,6 @@ void BM_RotationAlignment(benchmark::State& st) {
   }
 }
 BENCHMARK(BM_RotationAlignment)->Unit(benchmark::kMillisecond)->MinTime(1.0);
-void BM_FrontEnd_svslam_no_repredict(benchmark::State& st) { frontEnd(st, false); }
 
 void BM_FrontEnd_opencv_orb(benchmark::State& st) {
   const Sequence& seq = sequence();

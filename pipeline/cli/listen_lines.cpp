@@ -41,6 +41,18 @@ const char* statusName(drivers::TrackingStatus s) {
   return "unknown";
 }
 
+const char* searchName(drivers::SearchKind s) {
+  switch (s) {
+    case drivers::SearchKind::kPredicted:
+      return "predicted";
+    case drivers::SearchKind::kRepredicted:
+      return "repredicted";
+    case drivers::SearchKind::kRetried:
+      return "retried";
+  }
+  return "unknown";
+}
+
 JsonObject header(ListenType t, const std::string& channel) {
   JsonObject j;
   j.add("type", listenTypeName(t)).add("channel", channel);
@@ -70,9 +82,7 @@ ListenLine poseLine(const std::string& channel, const std::uint8_t* d, std::size
       .add("motion_residual_per_dof", r->motion_residual_per_dof, 3)
       .add("observation_nis_per_dof", r->observation_nis_per_dof, 3)
       .add("landmarks_observed", r->landmarks_observed)
-      .add("search", r->search == drivers::SearchKind::kRepredicted ? "repredicted"
-                     : r->search == drivers::SearchKind::kRetried   ? "retried"
-                                                                     : "predicted");
+      .add("search", searchName(r->search));
   return done(ListenType::kPose, j);
 }
 

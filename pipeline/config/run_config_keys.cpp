@@ -248,8 +248,8 @@ ConfigSection odometry() {
       number("lost_search_radius_px", SVSLAM_FIELD(odometry.lost_search_radius_px), 1, 4000, "px",
              "search radius of the retry and of the first pair (no motion yet)"),
       flag("repredict", SVSLAM_FIELD(odometry.repredict),
-           "guided re-matching: a RANSAC motion of the matches predicts a second pass when the "
-           "prediction was the identity or poor"),
+           "when the prediction was the identity or poor, the search is predicted again: "
+           "rotation by image alignment, then a RANSAC motion of the matches"),
       number("repredict_px", SVSLAM_FIELD(odometry.repredict_px), 0.1, 1000, "px",
              "median distance of the matches from their prediction that makes it poor"),
       flag("ransac_on_repredict", SVSLAM_FIELD(odometry.ransac_on_repredict),

@@ -56,13 +56,14 @@ class RotationAlignment {
 
  private:
   void buildPyramid(ImageView<const std::uint8_t> img, std::vector<Image<float>>& pyr) const;
-  // Aligns at one level from R (updated in place); returns the robust cost per used pixel.
   // Robust cost per used pixel of rotation R and brightness (a, b) at one level; with H and g,
   // also adds the Gauss-Newton normal equations of (dtheta, da, db). overlap: share of the
   // level's pixels that stayed in view. Infinity when under 50 pixels did.
   double accumulate(int level, const PinholeCamera& cam, const Eigen::Matrix3d& R, double a,
                     double b, Eigen::Matrix<double, 5, 5>* H, Eigen::Matrix<double, 5, 1>* g,
                     double& overlap) const;
+  // Gauss-Newton at one level from R, a, b (updated in place); returns the robust cost per used
+  // pixel of the last step's linearisation point.
   double alignLevel(int level, const PinholeCamera& cam, Eigen::Matrix3d& R, double& a,
                     double& b, double& overlap) const;
 

@@ -35,7 +35,6 @@ StereoOdometry::StereoOdometry(const StereoOdometryParams& params, const StereoC
                           std::max(calib.width, 16), std::max(calib.height, 16)) {
   init_status_ = params.validate();
   if (init_status_) init_status_ = calib.validate();
-  if (init_status_ && params.repredict) init_status_ = params.rotation_alignment.validate();
   if (init_status_) {
     prev_left_.resize(calib.width, calib.height);
     cur_left_.resize(calib.width, calib.height);
@@ -120,7 +119,7 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left, const Stereo
     if (!s) return s;
     if (params_.repredict &&
         (!motion_known_ || static_cast<int>(matches_.size()) < params_.min_matches ||
-         medianPredictionError(last_motion_) > params_.repredict_px)) {
+         medianPredictionError(last_motion_, cam) > params_.repredict_px)) {
       if (Status rs = repredict(left, cam, out); !rs) return rs;
     }
     if (static_cast<int>(matches_.size()) < params_.min_matches) {
@@ -137,8 +136,8 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left, const Stereo
   return Status::ok();
 }
 
-double StereoOdometry::medianPredictionError(const Eigen::Isometry3d& T_cur_prev) {
-  const PinholeCamera cam = calib_.leftCamera();
+double StereoOdometry::medianPredictionError(const Eigen::Isometry3d& T_cur_prev,
+                                             const PinholeCamera& cam) {
   errors_.clear();
   for (const TemporalMatch& m : matches_) {
     const Eigen::Vector3d X = T_cur_prev * prev_[static_cast<std::size_t>(m.prev)].p_cam;
@@ -153,13 +152,19 @@ double StereoOdometry::medianPredictionError(const Eigen::Isometry3d& T_cur_prev
   return *mid;
 }
 
-int StereoOdometry::bootstrap(const std::vector<TemporalMatch>& matches) {
+void StereoOdometry::fillPairs(const std::vector<TemporalMatch>& matches,
+                               const std::vector<std::uint8_t>* exclude) {
   pairs_.clear();
-  for (const TemporalMatch& m : matches) {
-    const TrackPoint& p = prev_[static_cast<std::size_t>(m.prev)];
-    const TrackPoint& c = cur_[static_cast<std::size_t>(m.cur)];
+  for (std::size_t k = 0; k < matches.size(); ++k) {
+    if (exclude && (*exclude)[k]) continue;
+    const TrackPoint& p = prev_[static_cast<std::size_t>(matches[k].prev)];
+    const TrackPoint& c = cur_[static_cast<std::size_t>(matches[k].cur)];
     pairs_.push_back({p.p_cam, p.cov, c.p_cam, c.cov});
   }
+}
+
+int StereoOdometry::bootstrap(const std::vector<TemporalMatch>& matches) {
+  fillPairs(matches, nullptr);
   if (static_cast<int>(pairs_.size()) < params_.motion.min_inliers) return 0;
   if (!bootstrap_motion_.process(pairs_, bootstrap_result_)) return 0;
   if (!bootstrap_result_.T_cur_prev.matrix().allFinite()) return 0;
@@ -172,10 +177,10 @@ Status StereoOdometry::repredict(ImageView<const std::uint8_t> left, const Pinho
   // rotation and from none, with the constant-velocity translation, searched as widely as a
   // retry (a close scene's parallax is not in the rotation). The ROI regions were placed with
   // the poor prediction, so they are not used by the second passes.
-  starts_.assign({last_motion_.linear(), Eigen::Matrix3d::Identity()});
-  RotationAlignmentResult rot;
-  // (An image under 16x16 pixels has no alignment: process() then fails and (b) alone runs.)
   // Without a measured motion the first pass already searched widely around the identity.
+  // (An image under 16x16 pixels has no alignment: process() then fails and (b) alone runs.)
+  RotationAlignmentResult rot;
+  if (motion_known_) starts_.assign({last_motion_.linear(), Eigen::Matrix3d::Identity()});
   if (motion_known_ && rotation_alignment_.process(prev_left_.cview(), left, cam, starts_, rot)) {
     Eigen::Isometry3d T_pred = last_motion_;
     T_pred.linear() = rot.R_cur_prev;
@@ -214,14 +219,7 @@ Status StereoOdometry::estimateMotion(const std::vector<std::uint8_t>* exclude,
   ++frame_;
   Eigen::Isometry3d T_cur_prev = last_motion_;
   if (has_prev_) {
-    pairs_.clear();
-    for (std::size_t k = 0; k < matches_.size(); ++k) {
-      if (exclude && (*exclude)[k]) continue;
-      const TemporalMatch& m = matches_[k];
-      const TrackPoint& p = prev_[static_cast<std::size_t>(m.prev)];
-      const TrackPoint& c = cur_[static_cast<std::size_t>(m.cur)];
-      pairs_.push_back({p.p_cam, p.cov, c.p_cam, c.cov});
-    }
+    fillPairs(matches_, exclude);
     VisualMotionResult& vm = motion_result_;
     // Failure reasons are written into out.failure's own buffer (no temporary string).
     if (static_cast<int>(pairs_.size()) < params_.min_matches) {

@@ -110,7 +110,10 @@ class StereoOdometry {
 
  private:
   // Median over matches_ of |projected T_cur_prev * X_prev - matched point|, px (0 if none).
-  double medianPredictionError(const Eigen::Isometry3d& T_cur_prev);
+  double medianPredictionError(const Eigen::Isometry3d& T_cur_prev, const PinholeCamera& cam);
+  // pairs_ = the 3D point pairs of `matches` whose exclude[k] is 0 (all when null).
+  void fillPairs(const std::vector<TemporalMatch>& matches,
+                 const std::vector<std::uint8_t>* exclude);
   Status repredict(ImageView<const std::uint8_t> left, const PinholeCamera& cam,
                    OdometryFrameResult& out);
   // Seeded RANSAC motion of `matches` into bootstrap_result_; its inlier count (0: failed).
