@@ -33,6 +33,14 @@ ConfigSection loopConfigSection() {
              "(6 dof) of the motion chain; 0: always the motion chain"),
       number("pair_chi2", SVSLAM_FIELD(loop.consistency.pair_chi2), 1e-3, 1e6, "",
              "chi-square (6 dof) bound of a loop pair's cycle through the odometry"),
+      flag("feedback", SVSLAM_FIELD(loop_feedback),
+           "true: after a solution the estimator (pose, landmarks of the state and their "
+           "covariance) moves into the corrected frame; false: only the outputs and the LCM "
+           "correction message are corrected"),
+      number("feedback_delay_frames", SVSLAM_FIELD(loop_feedback_delay_frames), 1, 1000, "",
+           "a solution made at a keyframe moves the estimator before the frame this many "
+           "frames later (replayed as fast as possible the estimator waits for it there, so "
+           "the output does not depend on thread timing; live, it is applied when ready)"),
       number("wrong_loop_fraction", SVSLAM_FIELD(loop.wrong_loop_fraction), 0, 0.5, "",
              "test hook: share of verified loops re-attached to a wrong keyframe (seeded by "
              "seed); 0 in any real use"),

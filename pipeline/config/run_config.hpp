@@ -59,6 +59,11 @@ struct RunConfig {
   bool loop_enabled = false;
   std::string loop_vocabulary;
   LoopCloserParams loop;
+  // The estimator moves into the back end's corrected frame (Estimator::moveWorld) before the
+  // frame loop_feedback_delay_frames after the keyframe whose solution gave the correction
+  // (pipeline/realtime/loop_stage.hpp).
+  bool loop_feedback = true;
+  int loop_feedback_delay_frames = 5;
 };
 
 // Sets the worker threads and everything that follows them (the dense stereo stripes).

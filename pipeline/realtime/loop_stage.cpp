@@ -1,6 +1,7 @@
 #include "pipeline/realtime/loop_stage.hpp"
 
 #include <cstdio>
+#include <limits>
 
 #include "pipeline/cli/json_writer.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
@@ -8,6 +9,9 @@
 #ifdef SVSLAM_HAVE_CERES
 #include <readerwriterqueue/readerwritercircularbuffer.h>
 
+#include <chrono>
+#include <condition_variable>
+#include <deque>
 #include <mutex>
 
 #include "drivers/files/trajectory_io.hpp"
@@ -64,9 +68,62 @@ struct LoopStage::Impl {
   int vocabulary_words = 0;
   std::int64_t frames_seen = 0;
 
+  // Feedback (see the header): written under fb_mutex by the front end (frames seen, keyframes
+  // handed over), the back end (keyframes done, solutions) and the estimator (waits, takes).
+  struct Solution {
+    std::int64_t kf_frame;
+    Eigen::Isometry3d C;  // T_corrected_K T_online_K^-1
+  };
+  std::mutex fb_mutex;
+  std::condition_variable fb_cv;
+  std::int64_t last_front = -1;       // last frame the front end handled
+  std::deque<std::int64_t> pending;   // frames of the keyframes handed to the back end, not done
+  std::int64_t resolved = -1;         // every keyframe of a frame <= this one is done
+  bool fb_stop = false;
+  bool wait_for_back_end = false;
+  std::deque<Solution> solutions;     // posted, not yet taken
+  // Estimator thread (read after the run).
+  struct Applied {
+    std::int64_t frame;
+    Eigen::Isometry3d delta;
+  };
+  std::vector<Applied> applied;
+  double feedback_wait_max_ms = 0;
+  std::int64_t feedback_wait_timeouts = 0;
+
+  void updateResolved() { resolved = pending.empty() ? last_front : pending.front() - 1; }
+  // Back end: keyframe done (with a new solution when `optimised`).
+  void keyframeDone(bool optimised);
+  // The moves applied at frames in (after_frame, up_to_frame], composed: Delta_m ... Delta_1.
+  Eigen::Isometry3d appliedBetween(std::int64_t after_frame, std::int64_t up_to_frame) const;
+  // Correction of keyframe k: T_corrected_k T_online_k^-1.
+  Eigen::Isometry3d keyframeCorrection(std::size_t k) const {
+    return closer->correctedKeyframes()[k] * closer->keyframes()[k].T_world_cam.inverse();
+  }
+  Status writeLandmarks(const std::vector<MapLandmark>& map) const;
+
   void backEnd();
   void publishCorrection(const Keyframe& kf);
 };
+
+void LoopStage::Impl::keyframeDone(bool optimised) {
+  std::lock_guard<std::mutex> lock(fb_mutex);
+  if (!pending.empty()) pending.pop_front();
+  if (optimised && cfg.loop_feedback && !closer->keyframes().empty()) {
+    const std::size_t k = closer->keyframes().size() - 1;
+    solutions.push_back({closer->keyframes()[k].frame, keyframeCorrection(k)});
+  }
+  updateResolved();
+  fb_cv.notify_all();
+}
+
+Eigen::Isometry3d LoopStage::Impl::appliedBetween(std::int64_t after_frame,
+                                                  std::int64_t up_to_frame) const {
+  Eigen::Isometry3d B = Eigen::Isometry3d::Identity();
+  for (const Applied& a : applied)
+    if (a.frame > after_frame && a.frame <= up_to_frame) B = a.delta * B;
+  return B;
+}
 
 void LoopStage::Impl::backEnd() {
   for (;;) {
@@ -82,23 +139,26 @@ void LoopStage::Impl::backEnd() {
           if (lcm && !closer->keyframes().empty()) publishCorrection(closer->keyframes().back());
         }
       }
+      std::lock_guard<std::mutex> lock(fb_mutex);
+      fb_stop = true;
+      fb_cv.notify_all();
       return;
     }
+    bool optimised = false;
     if (error.isOk()) {
       const std::int64_t t_ns = item->kf.t_ns;
-      bool optimised = false;
       const std::int64_t t0 = steadyNowNs();
       const Status s = closer->process(std::move(item->kf), item->odo_cov, item->odo_T, optimised);
       if (!s) {
         error = Status(s.code(), "loop closing, keyframe at t_ns " + std::to_string(t_ns) + ": " +
                                      s.message());
-        continue;
-      }
-      if (optimised) {
+        optimised = false;
+      } else if (optimised) {
         solve_ms.push_back(static_cast<double>(steadyNowNs() - t0) * 1e-6);
         if (lcm) publishCorrection(closer->keyframes().back());
       }
     }
+    keyframeDone(optimised);
   }
 }
 
@@ -132,6 +192,7 @@ LoopStage::LoopStage(const config::RunConfig& cfg, drivers::StereoSource& source
     : impl_(std::make_unique<Impl>(cfg, source, std::move(out_dir), lcm)) {}
 
 LoopStage::~LoopStage() {
+  stopFeedback();
   if (impl_->started && !impl_->closed) {
     impl_->ring.wait_enqueue(nullptr);
     impl_->closed = true;
@@ -186,6 +247,13 @@ Status LoopStage::process(FrameSlot& slot) {
                        Eigen::Quaternionf(Eigen::Quaterniond(T.linear()).cast<float>()),
                        T.translation().cast<float>()});
   }
+  {
+    std::lock_guard<std::mutex> lock(m.fb_mutex);
+    m.last_front = slot.frame.index;
+    if (made) m.pending.push_back(slot.frame.index);
+    m.updateResolved();
+    m.fb_cv.notify_all();
+  }
   if (made) {
     times_.add("keyframe", static_cast<double>(steadyNowNs() - t0) * 1e-6);
     StageWait waiting;  // on the back end's thread when its ring is full
@@ -194,7 +262,68 @@ Status LoopStage::process(FrameSlot& slot) {
   return Status::ok();
 }
 
-Status LoopStage::finish() {
+void LoopStage::setWaitForBackEnd(bool wait) {
+  std::lock_guard<std::mutex> lock(impl_->fb_mutex);
+  impl_->wait_for_back_end = wait;
+}
+
+void LoopStage::stopFeedback() {
+  std::lock_guard<std::mutex> lock(impl_->fb_mutex);
+  impl_->fb_stop = true;
+  impl_->fb_cv.notify_all();
+}
+
+bool LoopStage::correctionBefore(std::int64_t frame, Eigen::Isometry3d& C_new_old) {
+  Impl& m = *impl_;
+  if (!m.cfg.loop_feedback || !m.started) return false;
+  const std::int64_t delay = m.cfg.loop_feedback_delay_frames;
+  Impl::Solution due{-1, Eigen::Isometry3d::Identity()};
+  {
+    std::unique_lock<std::mutex> lock(m.fb_mutex);
+    if (m.wait_for_back_end && m.resolved < frame - delay && !m.fb_stop) {
+      const std::int64_t w0 = steadyNowNs();
+      StageWait waiting;  // on the back end
+      // A bound against a stage that stopped without saying so: the run goes on, counted.
+      if (!m.fb_cv.wait_for(lock, std::chrono::seconds(30),
+                            [&] { return m.fb_stop || m.resolved >= frame - delay; }))
+        ++m.feedback_wait_timeouts;
+      m.feedback_wait_max_ms =
+          std::max(m.feedback_wait_max_ms, static_cast<double>(steadyNowNs() - w0) * 1e-6);
+    }
+    while (!m.solutions.empty() && m.solutions.front().kf_frame + delay <= frame) {
+      due = m.solutions.front();  // the newest due solution supersedes older ones
+      m.solutions.pop_front();
+    }
+  }
+  if (due.kf_frame < 0) return false;
+  C_new_old = due.C * m.appliedBetween(due.kf_frame, frame).inverse();
+  m.applied.push_back({frame, C_new_old});
+  return true;
+}
+
+Status LoopStage::Impl::writeLandmarks(const std::vector<MapLandmark>& map) const {
+  const std::vector<Keyframe>& kfs = closer->keyframes();
+  std::vector<run::PlyLandmark> ply;
+  ply.reserve(map.size());
+  for (const MapLandmark& l : map) {
+    Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
+    if (closer->solved() && !kfs.empty()) {
+      // The keyframe at or before the frame the landmark was last estimated in (the last frame
+      // for one still in the state).
+      const std::int64_t s =
+          l.active ? std::numeric_limits<std::int64_t>::max() : l.last_seen_frame;
+      std::size_t k = 0;
+      while (k + 1 < kfs.size() && kfs[k + 1].frame <= s) ++k;
+      M = keyframeCorrection(k) * appliedBetween(kfs[k].frame, s).inverse();
+    }
+    const Eigen::Matrix3d C = M.linear() * l.cov * M.linear().transpose();
+    ply.push_back({l.id, M * l.p_world, C.diagonal().cwiseMax(0.0).cwiseSqrt(), l.active,
+                   l.observations});
+  }
+  return run::writeLandmarksPly(out_dir + "/" + run::files::kLandmarksOptimized, ply);
+}
+
+Status LoopStage::finish(const std::vector<MapLandmark>& map) {
   Impl& m = *impl_;
   if (!m.started) return Status::ok();
   if (!m.closed) {
@@ -239,7 +368,8 @@ Status LoopStage::finish() {
     }
     if (Status s = w.append(t, T); !s) return s;
   }
-  return w.close();
+  if (Status s = w.close(); !s) return s;
+  return map.empty() ? Status::ok() : m.writeLandmarks(map);
 }
 
 std::string LoopStage::json() const {
@@ -264,6 +394,12 @@ std::string LoopStage::json() const {
   }
   o.add("last_max_correction_m", st.last_max_correction_m, 4);
   o.add("corrections_published", m.corrections_published);
+  o.add("feedback_moves", static_cast<std::int64_t>(m.applied.size()));
+  double moved_m = 0;  // |t| of the move: how far it shifts the world origin
+  for (const Impl::Applied& a : m.applied) moved_m = std::max(moved_m, a.delta.translation().norm());
+  o.add("feedback_max_translation_m", moved_m, 4);
+  o.add("feedback_wait_max_ms", m.feedback_wait_max_ms, 1);
+  o.add("feedback_wait_timeouts", m.feedback_wait_timeouts);
   double worst = 0;
   for (double v : m.solve_ms) worst = std::max(worst, v);
   o.add("back_end_max_ms", worst, 1);
@@ -295,7 +431,10 @@ Status LoopStage::init() {
       "loop.enabled: this build has no loop closing (Ceres was not found when it was built)");
 }
 Status LoopStage::process(FrameSlot&) { return Status::ok(); }
-Status LoopStage::finish() { return Status::ok(); }
+bool LoopStage::correctionBefore(std::int64_t, Eigen::Isometry3d&) { return false; }
+void LoopStage::setWaitForBackEnd(bool) {}
+void LoopStage::stopFeedback() {}
+Status LoopStage::finish(const std::vector<MapLandmark>&) { return Status::ok(); }
 std::string LoopStage::json() const { return "{}"; }
 
 #endif

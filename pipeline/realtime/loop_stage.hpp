@@ -9,13 +9,23 @@
 //    estimator (only the after-publication thread waits when the ring is full). After each
 //    solution a pose_correction_t goes out on LCM (lcm.correction_channel) with the keyframes
 //    whose correction changed.
+// Feedback (loop.feedback): a solution made when the back end handled keyframe K (source frame
+// f_K) moves the estimator into the corrected frame before frame f_K + D is estimated
+// (D = loop.feedback_delay_frames; Estimator::moveWorld). Its correction of keyframe K,
+// C_K = T_corrected_K T_online_K^-1, maps an online pose of f_K's time; moves already applied
+// after f_K are in the estimator's frame but not in T_online_K, so the move is
+//     Delta = C_K B^-1,   B = Delta_m ... Delta_1 (the moves applied at frames after f_K).
 // At the end of the run (after the last keyframe is processed): trajectory_optimized_kitti.txt
 // and trajectory_optimized_tum.txt, the published trajectory (trajectory_tum.txt) with every
-// pose moved by the correction of its time (LoopCloser::correctionAt).
-// Determinism: the back end sees every keyframe in order and feeds nothing back into the
-// estimator, so its output does not depend on thread timing when the front end sees every frame
-// (as fast as possible); live, frames the after-publication thread skips are not keyframe
-// candidates.
+// pose moved by the correction of its time (LoopCloser::correctionAt), and
+// landmarks_optimized.ply: every landmark of the map moved the same way from the keyframe at or
+// before the frame it was last seen (C_k B_s^-1, B_s the moves applied after f_k up to then).
+// Determinism: the back end sees every keyframe in order; replayed as fast as possible the
+// front end sees every frame and the estimator, before frame f, waits until the back end has
+// handled every keyframe made up to frame f - D, so which moves apply where does not depend on
+// thread timing (threaded == --sequential). Live (frames may be skipped) a solution is applied
+// at the first frame at or after f_K + D at which it is ready: the estimator never waits.
+#include <Eigen/Geometry>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -28,6 +38,7 @@
 #include "pipeline/config/run_config.hpp"
 #include "pipeline/realtime/frame_slot.hpp"
 #include "pipeline/run/run_outputs.hpp"
+#include "slam/map_landmark.hpp"
 
 namespace svslam::rt {
 
@@ -45,8 +56,16 @@ class LoopStage {
   Status init();
   // After-publication thread: one published frame.
   Status process(FrameSlot& slot);
-  // After the run: drains the back end, joins it, writes the optimised trajectory files.
-  Status finish();
+  // Estimator thread, before frame `frame` is estimated: true with the move of the world frame
+  // to apply now (Estimator::moveWorld) when a solution is due (feedback on). With
+  // setWaitForBackEnd(true) it first waits for the back end (see Determinism above).
+  bool correctionBefore(std::int64_t frame, Eigen::Isometry3d& C_new_old);
+  void setWaitForBackEnd(bool wait);
+  // Ends every wait of correctionBefore (a stage after the estimator failed; the run's end).
+  void stopFeedback();
+  // After the run: drains the back end, joins it, writes the optimised trajectory files and,
+  // from `map` (the estimator's landmarks at the end; empty: none), landmarks_optimized.ply.
+  Status finish(const std::vector<MapLandmark>& map);
   // stats.json's "loop" object.
   std::string json() const;
   const run::StageTimes& times() const { return times_; }

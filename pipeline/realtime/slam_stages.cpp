@@ -78,15 +78,23 @@ StageGraph SlamStages::graph(EdgePolicy capture_input) {
   last_stereo_seq_ = -1;
   StageGraph g;
   g.source = {"capture", [this](FrameSlot& s) { return capture(s); }};
+  // Replayed as fast as possible (blocking edges: the mapper sees every frame) the estimator
+  // waits for loop-closing solutions at fixed frames; a stage after it that fails ends the wait.
+  if (loop_stage_) loop_stage_->setWaitForBackEnd(capture_input == EdgePolicy::kBlocking);
   g.stages = {{"stereo", [this](FrameSlot& s) { return stereo(s); }, capture_input},
               {"estimator", [this](FrameSlot& s) { return estimate(s); }},
-              {"publisher", [this](FrameSlot& s) { return publisher_->publish(s); }}};
+              {"publisher", [this](FrameSlot& s) {
+                 Status st = publisher_->publish(s);
+                 if (!st && loop_stage_) loop_stage_->stopFeedback();
+                 return st;
+               }}};
   if (map_stage_ || loop_stage_) {
     StageSpec mapper{"mapper",
                      [this](FrameSlot& s) {
-                       if (map_stage_)
-                         if (Status st = map_stage_->process(s); !st) return st;
-                       return loop_stage_ ? loop_stage_->process(s) : Status::ok();
+                       Status st = map_stage_ ? map_stage_->process(s) : Status::ok();
+                       if (st && loop_stage_) st = loop_stage_->process(s);
+                       if (!st && loop_stage_) loop_stage_->stopFeedback();
+                       return st;
                      },
                      capture_input};
     mapper.after_publish = true;
@@ -186,6 +194,12 @@ Status SlamStages::estimateFrame(FrameSlot& slot) {
   if (reset_requested_.exchange(false)) {
     if (Status s = buildEstimator(); !s) return s;
   }
+  Eigen::Isometry3d C_new_old;
+  if (loop_stage_ && loop_stage_->correctionBefore(slot.frame.index, C_new_old)) {
+    if (Status s = estimator_->moveWorld(C_new_old); !s)
+      return Status(s.code(), "frame " + std::to_string(slot.frame.index) +
+                                  ": loop-closing correction: " + s.message());
+  }
   estimator_clock_->start();
   const Status s =
       estimator_->process(slot.frame.left.cview(), slot.frame.right.cview(), slot.stereo,
@@ -270,7 +284,10 @@ Status SlamStages::finish() {
     if (s) s = ms;
   }
   if (loop_stage_) {
-    const Status ls = loop_stage_->finish();
+    loop_stage_->stopFeedback();
+    const Status ls = loop_stage_->finish(estimator_ && estimator_->outputs().landmark_map
+                                              ? estimator_->map()
+                                              : std::vector<MapLandmark>{});
     if (s) s = ls;
   }
   return s;

@@ -38,11 +38,12 @@ inline constexpr const char* kGroundTruthDem = "groundtruth_dem.tif";
 inline constexpr const char* kLatency = "latency.txt";
 inline constexpr const char* kTrajectoryOptimizedKitti = "trajectory_optimized_kitti.txt";
 inline constexpr const char* kTrajectoryOptimizedTum = "trajectory_optimized_tum.txt";
+inline constexpr const char* kLandmarksOptimized = "landmarks_optimized.ply";
 // `svslam plot` writes its pictures into the run folder by default: they belong to the run.
 inline constexpr const char* kAll[] = {
     kTrajectoryKitti, kTrajectoryTum, kGroundTruthKitti, kPoseCovariance, kLandmarks, kStats, kDem,
     kOrthoTiff,       kOrthoPng,      kHillshade,        kGroundTruthDem, kLatency,
-    kTrajectoryOptimizedKitti, kTrajectoryOptimizedTum,
+    kTrajectoryOptimizedKitti, kTrajectoryOptimizedTum, kLandmarksOptimized,
     "trajectory_top.png", "trajectory_top.svg", "altitude.png", "altitude.svg", "landmarks.png",
     "landmarks.svg", "latency.png", "latency.svg"};
 }  // namespace files

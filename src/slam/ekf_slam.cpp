@@ -74,6 +74,29 @@ Status EkfSlam::reset(const Eigen::Isometry3d& T_world_cam, const Matrix6d& P0) 
   return Status::ok();
 }
 
+Status EkfSlam::transformWorld(const Eigen::Isometry3d& C_new_old) {
+  if (!init_status_) return init_status_;
+  if (Status s = checkRigid(C_new_old, "transformWorld: C_new_old"); !s) return s;
+  const Eigen::Matrix3d Rc = orthonormalised(C_new_old.linear());
+  const Eigen::Vector3d tc = C_new_old.translation();
+  T_world_cam_.linear() = orthonormalised(Rc * T_world_cam_.linear());
+  T_world_cam_.translation() = Rc * T_world_cam_.translation() + tc;
+  const int n_lm = numLandmarks();
+  for (int i = 0; i < n_lm; ++i) m_world_.col(i) = Rc * m_world_.col(i) + tc;
+  // The stored lower triangle, by 3x3 blocks (the pose is blocks 0 and 1).
+  const int blocks = stateDim() / 3;
+  for (int bi = 0; bi < blocks; ++bi) {
+    for (int bj = 0; bj < bi; ++bj) {
+      auto B = P_.block<3, 3>(3 * bi, 3 * bj);
+      B = (Rc * B * Rc.transpose()).eval();
+    }
+    auto D = P_.block<3, 3>(3 * bi, 3 * bi);
+    const Eigen::Matrix3d full = D.selfadjointView<Lower>();
+    D.triangularView<Lower>() = Rc * full * Rc.transpose();
+  }
+  return Status::ok();
+}
+
 int EkfSlam::slotOf(int id) const { return slot_of_id_.find(id); }
 
 void EkfSlam::gatherColumns(int c0, int k, Eigen::MatrixXd& out) const {

@@ -135,6 +135,13 @@ class EkfSlam {
   // Removes landmark `id` from the state; its final position and covariance go to m_world and
   // cov when they are not null.
   Status removeLandmark(int id, Eigen::Vector3d* m_world, Eigen::Matrix3d* cov);
+  // Moves the whole state into another world frame (e.g. the loop-closing back end's corrected
+  // frame): with C = (R_c, t_c), T_wc <- C T_wc, m_i <- R_c m_i + t_c. The errors rotate with
+  // the frame (dtheta' = R_c dtheta, dt' = R_c dt, dm_i' = R_c dm_i), so P <- J P J^T with
+  // J = diag(R_c, R_c, R_c, ...): every 3x3 block B_ij <- R_c B_ij R_c^T. A rigid move of the
+  // estimate and its uncertainty together: every relative quantity (landmark in the camera,
+  // its predicted observation and innovation covariance) is unchanged. O(n^2); allocates nothing.
+  Status transformWorld(const Eigen::Isometry3d& C_new_old);
 
   const Eigen::Isometry3d& pose() const { return T_world_cam_; }
   Matrix6d poseCovariance() const;  // [dtheta (rad), dt (m)]

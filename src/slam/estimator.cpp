@@ -12,8 +12,17 @@ Status VoEstimator::process(ImageView<const std::uint8_t> left, ImageView<const 
   (void)executor;
   out = SlamFrameResult{};
   if (Status s = vo_.process(left, stereo, out.odometry, observer); !s) return s;
-  out.T_world_cam = out.odometry.T_first_cam;
+  out.T_world_cam = T_world_first_ * out.odometry.T_first_cam;
   out.pose_cov = out.odometry.covariance;
+  return Status::ok();
+}
+
+Status VoEstimator::moveWorld(const Eigen::Isometry3d& C_new_old) {
+  const Eigen::Matrix3d R = C_new_old.linear();
+  if (!C_new_old.matrix().allFinite() ||
+      !(R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) || R.determinant() <= 0)
+    return Status::invalidArgument("moveWorld: C_new_old is not a finite rigid transform");
+  T_world_first_ = C_new_old * T_world_first_;
   return Status::ok();
 }
 

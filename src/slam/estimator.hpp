@@ -72,6 +72,13 @@ class Estimator {
   virtual TrackingFeedback feedback() const = 0;
   // Every landmark ever initialised (empty without a landmark map).
   virtual std::vector<MapLandmark> map() const { return {}; }
+  // Moves the estimate into another world frame, T_world_cam <- C_new_old T_world_cam, with
+  // everything tied to the current pose: the filter's landmarks and their covariance (ekf,
+  // EkfSlam::transformWorld), the chained pose (vo). Loop closing's correction (pipeline/
+  // realtime/loop_stage.hpp). Landmarks already out of the state stay where they are: anchors
+  // are in the frame of the first pose, which loop closing holds fixed. invalidArgument when
+  // C_new_old is not a finite rigid transform (nothing moves).
+  virtual Status moveWorld(const Eigen::Isometry3d& C_new_old) = 0;
 };
 
 // The estimator of a kind; check initStatus() (invalid parameters or calibration).

@@ -63,6 +63,12 @@ class LandmarkManager {
   // template leaves the stored patch. `out` is a (2h+1)^2 buffer (row-major).
   bool templateFor(int id, const Eigen::Matrix3d& R_world_cam, const Eigen::Vector3d& p_cam_now,
                    double f_px, std::uint8_t* out) const;
+  // The world frame of landmark `id` (holding a slot) turned by R_new_old: its initial view's
+  // R_world_cam <- R_new_old R_world_cam (SlamSystem::moveWorld).
+  void rotateView(int id, const Eigen::Matrix3d& R_new_old) {
+    View& v = views_[slotOf(id)];
+    v.R_world_cam = R_new_old * v.R_world_cam;
+  }
   // A new observation in `frame`.
   void observed(int id, int frame);
 

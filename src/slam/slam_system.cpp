@@ -167,6 +167,12 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
   return Status::ok();
 }
 
+Status SlamSystem::moveWorld(const Eigen::Isometry3d& C_new_old) {
+  if (Status s = ekf_.transformWorld(C_new_old); !s) return s;
+  for (int id : ekf_.landmarkIds()) landmarks_.rotateView(id, C_new_old.linear());
+  return Status::ok();
+}
+
 std::vector<MapLandmark> SlamSystem::map() const {
   std::vector<MapLandmark> out = landmarks_.landmarks();
   for (MapLandmark& m : out)

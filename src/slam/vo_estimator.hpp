@@ -16,10 +16,13 @@ class VoEstimator final : public Estimator {
                  const StereoStageOutput& stereo, SlamFrameResult& out, Executor& executor,
                  StageObserver* observer = nullptr) override;
   TrackingFeedback feedback() const override { return vo_.feedback(); }
+  // T_world_first <- C_new_old T_world_first: the published pose is T_world_first T_first_cam.
+  Status moveWorld(const Eigen::Isometry3d& C_new_old) override;
   StereoOdometry& odometry() { return vo_; }
 
  private:
   StereoOdometry vo_;
+  Eigen::Isometry3d T_world_first_ = Eigen::Isometry3d::Identity();
 };
 
 }  // namespace svslam

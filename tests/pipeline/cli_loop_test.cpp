@@ -96,6 +96,13 @@ TEST_F(CliLoop, TwoLapsCloseLoopsAndWriteTheOptimisedTrajectory) {
       << err;
   EXPECT_EQ(slurp(a / "trajectory_optimized_kitti.txt"),
             slurp(b / "trajectory_optimized_kitti.txt"));
+  // The estimator moved into the corrected frame (loop.feedback) at the same frames in both.
+  const std::size_t fm = stats.find("\"feedback_moves\": ");
+  ASSERT_NE(fm, std::string::npos) << stats;
+  EXPECT_GE(std::stoi(stats.substr(fm + 18)), 1) << stats;
+  EXPECT_EQ(slurp(a / "trajectory_kitti.txt"), slurp(b / "trajectory_kitti.txt"));
+  EXPECT_EQ(slurp(a / "landmarks_optimized.ply"), slurp(b / "landmarks_optimized.ply"));
+  EXPECT_EQ(lines(a / "landmarks_optimized.ply").size(), lines(a / "landmarks.ply").size());
 }
 
 TEST_F(CliLoop, BadLoopConfigurationIsNamed) {

@@ -231,6 +231,60 @@ TEST(EkfSlam, RemoveLandmarkReturnsItsEstimateAndKeepsTheRest) {
   ASSERT_TRUE(ekf.update({{new_id, Vector3d(1, 0, 8), stereoCov(Vector3d(1, 0, 8))}}, res).isOk());
 }
 
+// A move of the world frame (loop-closing correction): pose and landmarks move rigidly,
+// P <- J P J^T with J = diag(R_c, ..., R_c), and everything the filter computes relative to the
+// camera is unchanged: the same observations give the same innovations, gating and relative
+// state after the update.
+TEST(EkfSlam, TransformWorldMovesStateAndCovarianceRigidly) {
+  std::mt19937 rng(31);
+  EkfSlam a = filledFilter(5, rng);
+  EkfSlam b = a;
+  const Isometry3d C = pose({0.03, -0.02, 0.15}, {2.0, -1.5, 0.4});
+  const MatrixXd P = a.covariance();
+  ASSERT_TRUE(b.transformWorld(C).isOk());
+  EXPECT_TRUE(b.pose().isApprox(C * a.pose(), 1e-12));
+  const int n = a.stateDim();
+  MatrixXd J = MatrixXd::Zero(n, n);
+  for (int k = 0; k < n / 3; ++k) J.block<3, 3>(3 * k, 3 * k) = C.linear();
+  EXPECT_LT((b.covariance() - J * P * J.transpose()).norm(), 1e-12 * P.norm());
+  for (int id : a.landmarkIds()) {
+    Vector3d pa, pb;
+    Matrix3d Ca, Cb;
+    ASSERT_TRUE(a.landmark(id, pa, Ca).isOk());
+    ASSERT_TRUE(b.landmark(id, pb, Cb).isOk());
+    EXPECT_LT((pb - C * pa).norm(), 1e-12);
+  }
+  // The same camera-frame observations (one planted outlier) on both.
+  std::vector<LandmarkObservation> obs;
+  std::normal_distribution<double> noise(0, 0.02);
+  for (int id : a.landmarkIds()) {
+    Vector3d m;
+    Matrix3d Cm;
+    ASSERT_TRUE(a.landmark(id, m, Cm).isOk());
+    const Vector3d z = a.pose().inverse() * m + Vector3d(noise(rng), noise(rng), noise(rng));
+    obs.push_back({id, z, stereoCov(z)});
+  }
+  obs[2].z_cam += Vector3d(3, 0, 0);
+  std::vector<ObservationResult> ra, rb;
+  ASSERT_TRUE(a.update(obs, ra).isOk());
+  ASSERT_TRUE(b.update(obs, rb).isOk());
+  ASSERT_EQ(ra.size(), rb.size());
+  for (std::size_t k = 0; k < ra.size(); ++k) {
+    EXPECT_EQ(ra[k].accepted, rb[k].accepted);
+    EXPECT_NEAR(ra[k].mahalanobis_d2, rb[k].mahalanobis_d2, 1e-6 * (1 + ra[k].mahalanobis_d2));
+  }
+  EXPECT_FALSE(ra[2].accepted);
+  EXPECT_TRUE(b.pose().isApprox(C * a.pose(), 1e-9));
+  EXPECT_LT((b.covariance() - J * a.covariance() * J.transpose()).norm(),
+            1e-9 * a.covariance().norm());
+  // Not a rigid transform: refused, nothing changed.
+  Isometry3d bad = C;
+  bad.linear() *= 1.1;
+  const Isometry3d before = b.pose();
+  EXPECT_EQ(b.transformWorld(bad).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(b.pose().matrix(), before.matrix());
+}
+
 // Loop: landmarks near the start, a long excursion with prediction only, then re-perception of
 // the first landmarks (1 px matching error, seed 001 sec. 4.1): the pose covariance shrinks.
 // A landmark measured from an exactly known pose: the same as addLandmark on a filter whose
