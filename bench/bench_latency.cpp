@@ -15,11 +15,18 @@
 //            f b / d = 1951 px m / d, depths 17 to 41 m (the flight is at 25-30 m over +-3 m of
 //            relief), as a blimp's configuration would;
 //   kitti10  KITTI odometry seq A (../shared/data) at 10 Hz: zero drops (skipped if absent);
-//   fast640  synthetic 640x480 as fast as possible: >= 20 frames per second end to end.
+//   fast640  synthetic 640x480 as fast as possible: >= 20 frames per second end to end;
+//   loop10   blimp10 over two laps of a 70 m loop (loops from the second lap on) with loop
+//            closing on (needs --vocabulary FILE, from `svslam train-vocabulary`, e.g. the one
+//            scripts/loop_figures.sh trains at 1024x768), beside the same frames without it in
+//            the same run: the estimator's p99 unchanged while the back end optimises (skipped
+//            without --vocabulary).
 // Prints one JSON object per scenario.
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -58,7 +65,9 @@ std::unique_ptr<drivers::PreloadedSource> load(const std::string& spec, int fram
 }
 
 Outcome runOnce(drivers::PreloadedSource* frames_in_memory, double rate_hz, bool sequential,
-                int threads, int dense_min_px = 0, int dense_max_px = 0) {
+                int threads, int dense_min_px = 0, int dense_max_px = 0,
+                const std::function<void(config::RunConfig&)>& tweak = {},
+                std::string* loop_json = nullptr) {
   Outcome o;
   if (!frames_in_memory) return o;
   drivers::PreloadedSource& source = *frames_in_memory;
@@ -72,6 +81,7 @@ Outcome runOnce(drivers::PreloadedSource* frames_in_memory, double rate_hz, bool
     cfg.odometry.dense_stereo.min_disp = dense_min_px;
     cfg.odometry.dense_stereo.max_disp = dense_max_px;
   }
+  if (tweak) tweak(cfg);
   const std::string out =
       (std::filesystem::temp_directory_path() / "svslam_bench_latency").string();
   std::filesystem::create_directories(out);
@@ -93,6 +103,7 @@ Outcome runOnce(drivers::PreloadedSource* frames_in_memory, double rate_hz, bool
   o.ok = s.isOk();
   o.report = runner.report();
   o.map_p50_ms = work.stageTimes().median("map");
+  if (loop_json) *loop_json = work.loopJson();
   return o;
 }
 
@@ -125,7 +136,7 @@ void print(const char* name, const std::string& spec, double rate_hz, const Outc
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string scenario = "all";
+  std::string scenario = "all", vocabulary;
   int frames = 100, threads = 1;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -135,6 +146,8 @@ int main(int argc, char** argv) {
       frames = std::atoi(argv[++i]);
     } else if (a == "--threads" && i + 1 < argc) {
       threads = std::atoi(argv[++i]);
+    } else if (a == "--vocabulary" && i + 1 < argc) {
+      vocabulary = argv[++i];
     } else if (a == "--backend" && i + 1 < argc) {
       if (!simd::parseBackend(argv[++i], g_dense_backend) ||
           !simd::backendAvailable(g_dense_backend)) {
@@ -144,7 +157,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: bench_latency [--scenario blimp10|kitti10|fast640|all] [--frames N] "
-                   "[--threads T] [--backend auto|scalar|avx2|avx512|neon]\n");
+                   "[--threads T] [--backend auto|scalar|avx2|avx512|neon] [--vocabulary FILE]\n");
       return a == "--help" ? 0 : 2;
     }
   }
@@ -181,6 +194,38 @@ int main(int argc, char** argv) {
     const Outcome seq = runOnce(mem.get(), 0.0, true, threads);
     failures += !thr.ok || !seq.ok;
     print("fast640", spec, 0.0, thr, seq, ">= 20 fps");
+  }
+  if (scenarioOn("loop10")) {
+    const int lap = std::max(frames / 2, 2);
+    const std::string spec = "synthetic:frames=" + std::to_string(2 * lap) +
+                             ",loop_frames=" + std::to_string(lap) + ",loop_length_m=70";
+    if (vocabulary.empty()) {
+      std::printf("{\"scenario\": \"loop10\", \"skipped\": \"needs --vocabulary FILE\"}\n");
+    } else {
+      auto mem = load(spec, 2 * lap);
+      const auto with_loop = [&](config::RunConfig& c) {
+        c.loop_enabled = true;
+        c.loop_vocabulary = vocabulary;
+      };
+      std::string loop_json;
+      const Outcome off = runOnce(mem.get(), 10.0, false, threads, 48, 112);
+      const Outcome on = runOnce(mem.get(), 10.0, false, threads, 48, 112, with_loop, &loop_json);
+      failures += !off.ok || !on.ok;
+      const rt::LatencySummary e_off = off.report.stage("estimator"), e_on = on.report.stage("estimator");
+      std::printf(
+          "{\"scenario\": \"loop10\", \"source\": \"%s\", \"rate_hz\": 10.0, \"published\": %lld, "
+          "\"dropped\": %lld, \"estimator_p50_ms\": %.2f, \"estimator_p99_ms\": %.2f, "
+          "\"estimator_p99_without_loop_ms\": %.2f, \"estimator_p99_ratio\": %.3f, "
+          "\"latency_p99_ms\": %.2f, \"latency_p99_without_loop_ms\": %.2f, "
+          "\"dropped_without_loop\": %lld, \"loop\": %s, "
+          "\"target\": \"estimator p99 unchanged (ratio ~1), 0 dropped\"}\n",
+          spec.c_str(), static_cast<long long>(on.report.published),
+          static_cast<long long>(on.report.dropped), e_on.p50_ms, e_on.p99_ms, e_off.p99_ms,
+          e_off.p99_ms > 0 ? e_on.p99_ms / e_off.p99_ms : 0.0, on.report.end_to_end.p99_ms,
+          off.report.end_to_end.p99_ms, static_cast<long long>(off.report.dropped),
+          loop_json.empty() ? "{}" : loop_json.c_str());
+      std::fflush(stdout);
+    }
   }
   return failures ? 1 : 0;
 }

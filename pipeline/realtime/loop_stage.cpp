@@ -8,6 +8,9 @@
 
 #ifdef SVSLAM_HAVE_CERES
 #include <readerwriterqueue/readerwritercircularbuffer.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <condition_variable>
@@ -18,6 +21,8 @@
 #include "drivers/files/vocabulary_file.hpp"
 #include "drivers/lcm/lcm_pose_correction.hpp"
 #include "loop/loop_closer.hpp"
+#include "loop/relative_pose.hpp"
+#include "pipeline/service/scheduling.hpp"
 #endif
 
 namespace svslam::rt {
@@ -73,6 +78,7 @@ struct LoopStage::Impl {
   struct Solution {
     std::int64_t kf_frame;
     Eigen::Isometry3d C;  // T_corrected_K T_online_K^-1
+    Matrix6d cov;         // of T_corrected_K, [dtheta, dt] world frame
   };
   std::mutex fb_mutex;
   std::condition_variable fb_cv;
@@ -92,6 +98,8 @@ struct LoopStage::Impl {
   std::int64_t feedback_wait_timeouts = 0;
 
   void updateResolved() { resolved = pending.empty() ? last_front : pending.front() - 1; }
+  // Covariance of the corrected pose of keyframe k through the newest accepted loop (header).
+  Matrix6d correctedCovariance(std::size_t k) const;
   // Back end: keyframe done (with a new solution when `optimised`).
   void keyframeDone(bool optimised);
   // The moves applied at frames in (after_frame, up_to_frame], composed: Delta_m ... Delta_1.
@@ -111,10 +119,34 @@ void LoopStage::Impl::keyframeDone(bool optimised) {
   if (!pending.empty()) pending.pop_front();
   if (optimised && cfg.loop_feedback && !closer->keyframes().empty()) {
     const std::size_t k = closer->keyframes().size() - 1;
-    solutions.push_back({closer->keyframes()[k].frame, keyframeCorrection(k)});
+    solutions.push_back(
+        {closer->keyframes()[k].frame, keyframeCorrection(k), correctedCovariance(k)});
   }
   updateResolved();
   fb_cv.notify_all();
+}
+
+Matrix6d LoopStage::Impl::correctedCovariance(std::size_t k) const {
+  const std::vector<AcceptedLoop>& loops = closer->acceptedLoops();
+  const AcceptedLoop* a = nullptr;
+  for (const AcceptedLoop& l : loops)
+    if (!a || l.query > a->query) a = &l;
+  const std::vector<Keyframe>& kfs = closer->keyframes();
+  if (!a || static_cast<std::size_t>(a->query) > k) return kfs[k].pose_cov;
+  std::vector<Eigen::Isometry3d> factors{closer->correctedKeyframes()[a->candidate],
+                                         a->T_query_candidate.inverse()};
+  std::vector<Matrix6d> covs{kfs[a->candidate].pose_cov, Matrix6d::Zero()};
+  const Matrix6d J = inverseJacobian(a->T_query_candidate);
+  covs[1] = J * a->covariance * J.transpose();
+  for (std::size_t e = static_cast<std::size_t>(a->query); e < k; ++e) {
+    factors.push_back(closer->odometryEdge(e));
+    covs.push_back(closer->odometryCovariance(e));
+  }
+  std::vector<Matrix6d> A;
+  (void)productJacobians(factors, A);
+  Matrix6d cov = Matrix6d::Zero();
+  for (std::size_t i = 0; i < factors.size(); ++i) cov += A[i] * covs[i] * A[i].transpose();
+  return 0.5 * (cov + cov.transpose());
 }
 
 Eigen::Isometry3d LoopStage::Impl::appliedBetween(std::int64_t after_frame,
@@ -126,6 +158,10 @@ Eigen::Isometry3d LoopStage::Impl::appliedBetween(std::int64_t after_frame,
 }
 
 void LoopStage::Impl::backEnd() {
+  // The back end is never worth a late pose: like the mapper it yields the cores to the pose
+  // path (nice +10 for this thread only).
+  service::setCurrentThreadName("svslam-loop");
+  (void)setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 10);
   for (;;) {
     std::unique_ptr<KeyframeItem> item;
     ring.wait_dequeue(item);
@@ -234,6 +270,7 @@ Status LoopStage::process(FrameSlot& slot) {
   in.motion_valid = slot.result.odometry.tracked;
   in.T_cur_prev = slot.result.odometry.T_cur_prev;
   in.motion_cov = slot.result.odometry.covariance;
+  in.pose_cov = slot.result.pose_cov;
   in.left = slot.frame.left.cview();
   in.dense = slot.stereo.has_disparity ? &slot.stereo.disparity : nullptr;
   auto item = std::make_unique<KeyframeItem>();
@@ -273,11 +310,12 @@ void LoopStage::stopFeedback() {
   impl_->fb_cv.notify_all();
 }
 
-bool LoopStage::correctionBefore(std::int64_t frame, Eigen::Isometry3d& C_new_old) {
+bool LoopStage::correctionBefore(std::int64_t frame, Eigen::Isometry3d& C_new_old,
+                                 Matrix6d& cov_world) {
   Impl& m = *impl_;
   if (!m.cfg.loop_feedback || !m.started) return false;
   const std::int64_t delay = m.cfg.loop_feedback_delay_frames;
-  Impl::Solution due{-1, Eigen::Isometry3d::Identity()};
+  Impl::Solution due{-1, Eigen::Isometry3d::Identity(), Matrix6d::Zero()};
   {
     std::unique_lock<std::mutex> lock(m.fb_mutex);
     if (m.wait_for_back_end && m.resolved < frame - delay && !m.fb_stop) {
@@ -297,8 +335,12 @@ bool LoopStage::correctionBefore(std::int64_t frame, Eigen::Isometry3d& C_new_ol
   }
   if (due.kf_frame < 0) return false;
   C_new_old = due.C * m.appliedBetween(due.kf_frame, frame).inverse();
-  m.applied.push_back({frame, C_new_old});
+  cov_world = due.cov;
   return true;
+}
+
+void LoopStage::correctionApplied(std::int64_t frame, const Eigen::Isometry3d& moved) {
+  impl_->applied.push_back({frame, moved});
 }
 
 Status LoopStage::Impl::writeLandmarks(const std::vector<MapLandmark>& map) const {
@@ -431,7 +473,10 @@ Status LoopStage::init() {
       "loop.enabled: this build has no loop closing (Ceres was not found when it was built)");
 }
 Status LoopStage::process(FrameSlot&) { return Status::ok(); }
-bool LoopStage::correctionBefore(std::int64_t, Eigen::Isometry3d&) { return false; }
+bool LoopStage::correctionBefore(std::int64_t, Eigen::Isometry3d&, Eigen::Matrix<double, 6, 6>&) {
+  return false;
+}
+void LoopStage::correctionApplied(std::int64_t, const Eigen::Isometry3d&) {}
 void LoopStage::setWaitForBackEnd(bool) {}
 void LoopStage::stopFeedback() {}
 Status LoopStage::finish(const std::vector<MapLandmark>&) { return Status::ok(); }

@@ -10,11 +10,15 @@
 //    solution a pose_correction_t goes out on LCM (lcm.correction_channel) with the keyframes
 //    whose correction changed.
 // Feedback (loop.feedback): a solution made when the back end handled keyframe K (source frame
-// f_K) moves the estimator into the corrected frame before frame f_K + D is estimated
-// (D = loop.feedback_delay_frames; Estimator::moveWorld). Its correction of keyframe K,
-// C_K = T_corrected_K T_online_K^-1, maps an online pose of f_K's time; moves already applied
-// after f_K are in the estimator's frame but not in T_online_K, so the move is
-//     Delta = C_K B^-1,   B = Delta_m ... Delta_1 (the moves applied at frames after f_K).
+// f_K) corrects the estimator before frame f_K + D is estimated (D = loop.feedback_delay_frames;
+// Estimator::applyLoopCorrection). Its correction of keyframe K, C_K = T_corrected_K
+// T_online_K^-1, maps an online pose of f_K's time; moves already applied after f_K are in the
+// estimator's frame but not in T_online_K, so the correction given is
+//     C = C_K B^-1,   B = M_m ... M_1 (the moves the estimator made at frames after f_K),
+// with the covariance of the corrected pose of K to first order from the newest accepted loop
+// (query q, candidate c): T_world_K = T_world_c Z_qc^-1 T_q_(q+1) ... T_(K-1)_K, the product's
+// Jacobians (loop/relative_pose.hpp) applied to the estimator's covariance of c when it was made
+// (an upper bound of what the graph knows of it), the loop's and the odometry edges'.
 // At the end of the run (after the last keyframe is processed): trajectory_optimized_kitti.txt
 // and trajectory_optimized_tum.txt, the published trajectory (trajectory_tum.txt) with every
 // pose moved by the correction of its time (LoopCloser::correctionAt), and
@@ -56,10 +60,13 @@ class LoopStage {
   Status init();
   // After-publication thread: one published frame.
   Status process(FrameSlot& slot);
-  // Estimator thread, before frame `frame` is estimated: true with the move of the world frame
-  // to apply now (Estimator::moveWorld) when a solution is due (feedback on). With
-  // setWaitForBackEnd(true) it first waits for the back end (see Determinism above).
-  bool correctionBefore(std::int64_t frame, Eigen::Isometry3d& C_new_old);
+  // Estimator thread, before frame `frame` is estimated: true with the correction to apply now
+  // (Estimator::applyLoopCorrection: the move C_new_old and the covariance of the corrected
+  // pose) when a solution is due (feedback on). With setWaitForBackEnd(true) it first waits for
+  // the back end (see Determinism above). Then correctionApplied() with what moved.
+  bool correctionBefore(std::int64_t frame, Eigen::Isometry3d& C_new_old,
+                        Eigen::Matrix<double, 6, 6>& cov_world);
+  void correctionApplied(std::int64_t frame, const Eigen::Isometry3d& moved);
   void setWaitForBackEnd(bool wait);
   // Ends every wait of correctionBefore (a stage after the estimator failed; the run's end).
   void stopFeedback();

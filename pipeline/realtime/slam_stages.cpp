@@ -194,11 +194,12 @@ Status SlamStages::estimateFrame(FrameSlot& slot) {
   if (reset_requested_.exchange(false)) {
     if (Status s = buildEstimator(); !s) return s;
   }
-  Eigen::Isometry3d C_new_old;
-  if (loop_stage_ && loop_stage_->correctionBefore(slot.frame.index, C_new_old)) {
-    if (Status s = estimator_->moveWorld(C_new_old); !s)
-      return Status(s.code(), "frame " + std::to_string(slot.frame.index) +
-                                  ": loop-closing correction: " + s.message());
+  Eigen::Isometry3d C_new_old, moved;
+  Matrix6d cov_world;
+  if (loop_stage_ && loop_stage_->correctionBefore(slot.frame.index, C_new_old, cov_world)) {
+    if (Status s = estimator_->applyLoopCorrection(C_new_old, cov_world, moved); !s)
+      return Status(s.code(), "frame " + std::to_string(slot.frame.index) + ": " + s.message());
+    loop_stage_->correctionApplied(slot.frame.index, moved);
   }
   estimator_clock_->start();
   const Status s =

@@ -45,6 +45,8 @@ struct Keyframe {
   std::int64_t frame = 0;       // source frame index
   std::int64_t t_ns = 0;        // source timestamp
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // estimate at creation
+  // Its covariance ([dtheta, dt], world frame) from the estimator (zero when it has none).
+  Eigen::Matrix<double, 6, 6> pose_cov = Eigen::Matrix<double, 6, 6>::Zero();
   std::vector<OrbDescriptor> descriptors;
   std::vector<Eigen::Vector3f> p_cam;              // m, left camera frame of this keyframe
   std::vector<std::array<float, 6>> cov_cam;       // m^2: xx xy xz yy yz zz

@@ -71,6 +71,7 @@ Status LoopFrontEnd::process(const LoopFrameInput& in, bool& made, Keyframe& kf,
   kf.frame = in.frame;
   kf.t_ns = in.t_ns;
   kf.T_world_cam = in.T_world_cam;
+  kf.pose_cov = in.pose_cov;
   const Status s = builder_.process(in.left, *in.dense, kf);
   if (!s) {
     if (s.code() == StatusCode::kFailedPrecondition) return Status::ok();  // too few points

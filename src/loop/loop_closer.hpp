@@ -96,6 +96,7 @@ struct LoopFrameInput {
   bool motion_valid = false;  // the front end estimated T_cur_prev for this frame
   Eigen::Isometry3d T_cur_prev = Eigen::Isometry3d::Identity();
   Matrix6d motion_cov = Matrix6d::Zero();  // [dtheta, dt] of T_cur_prev
+  Matrix6d pose_cov = Matrix6d::Zero();    // of T_world_cam, [dtheta, dt] (zero: unknown)
   ImageView<const std::uint8_t> left;      // rectified, calibration size
   const DisparityResult* dense = nullptr;  // its dense disparity (required for a keyframe)
 };
@@ -175,6 +176,9 @@ class LoopCloser {
   // online estimate; also false for an edge not there yet).
   bool chainEdge(std::size_t k) const { return k < chain_edge_.size() && chain_edge_[k] != 0; }
   std::size_t edges() const { return chain_edge_.size(); }
+  // Odometry edge k (keyframe k -> k + 1): T_k_(k+1) of the motion chain and its covariance.
+  const Eigen::Isometry3d& odometryEdge(std::size_t k) const { return odo_T_[k]; }
+  const Matrix6d& odometryCovariance(std::size_t k) const { return odo_cov_[k]; }
   // Online estimate of keyframe k when it was made.
   const Eigen::Isometry3d& onlineKeyframe(std::size_t k) const { return T_online_[k]; }
   // The correction C (T_corrected = C T_online, world frame) of the online pose at time t_ns:

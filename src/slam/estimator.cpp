@@ -17,12 +17,15 @@ Status VoEstimator::process(ImageView<const std::uint8_t> left, ImageView<const 
   return Status::ok();
 }
 
-Status VoEstimator::moveWorld(const Eigen::Isometry3d& C_new_old) {
+Status VoEstimator::applyLoopCorrection(const Eigen::Isometry3d& C_new_old,
+                                        const Matrix6d& cov_world, Eigen::Isometry3d& moved) {
+  (void)cov_world;
   const Eigen::Matrix3d R = C_new_old.linear();
   if (!C_new_old.matrix().allFinite() ||
       !(R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) || R.determinant() <= 0)
-    return Status::invalidArgument("moveWorld: C_new_old is not a finite rigid transform");
+    return Status::invalidArgument("loop correction: C_new_old is not a finite rigid transform");
   T_world_first_ = C_new_old * T_world_first_;
+  moved = C_new_old;
   return Status::ok();
 }
 

@@ -72,13 +72,18 @@ class Estimator {
   virtual TrackingFeedback feedback() const = 0;
   // Every landmark ever initialised (empty without a landmark map).
   virtual std::vector<MapLandmark> map() const { return {}; }
-  // Moves the estimate into another world frame, T_world_cam <- C_new_old T_world_cam, with
-  // everything tied to the current pose: the filter's landmarks and their covariance (ekf,
-  // EkfSlam::transformWorld), the chained pose (vo). Loop closing's correction (pipeline/
-  // realtime/loop_stage.hpp). Landmarks already out of the state stay where they are: anchors
-  // are in the frame of the first pose, which loop closing holds fixed. invalidArgument when
-  // C_new_old is not a finite rigid transform (nothing moves).
-  virtual Status moveWorld(const Eigen::Isometry3d& C_new_old) = 0;
+  // Loop closing's correction (pipeline/realtime/loop_stage.hpp): the back end puts the current
+  // pose at C_new_old T_world_cam with covariance cov_world ([dtheta, dt], world frame).
+  //   ekf: a pose measurement update (EkfSlam::updatePose): the filter moves as far as that
+  //        covariance against its own says, the landmarks of the state with it through their
+  //        cross covariance, and the pose covariance shrinks;
+  //   vo:  the chained pose moves by C_new_old (it has no covariance to weigh it with).
+  // `moved` receives the world-frame move of the pose, T_after T_before^-1. Landmarks out of the
+  // state stay where they are (anchors are in the frame of the first pose, which loop closing
+  // holds fixed). invalidArgument when C_new_old is not a finite rigid transform or cov_world
+  // not symmetric positive definite (nothing moves).
+  virtual Status applyLoopCorrection(const Eigen::Isometry3d& C_new_old,
+                                     const Matrix6d& cov_world, Eigen::Isometry3d& moved) = 0;
 };
 
 // The estimator of a kind; check initStatus() (invalid parameters or calibration).

@@ -167,9 +167,15 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
   return Status::ok();
 }
 
-Status SlamSystem::moveWorld(const Eigen::Isometry3d& C_new_old) {
-  if (Status s = ekf_.transformWorld(C_new_old); !s) return s;
-  for (int id : ekf_.landmarkIds()) landmarks_.rotateView(id, C_new_old.linear());
+Status SlamSystem::applyLoopCorrection(const Eigen::Isometry3d& C_new_old,
+                                       const Matrix6d& cov_world, Eigen::Isometry3d& moved) {
+  if (!C_new_old.matrix().allFinite())
+    return Status::invalidArgument("loop correction: C_new_old is not finite");
+  const Eigen::Isometry3d before = ekf_.pose();
+  if (Status s = ekf_.updatePose(C_new_old * before, cov_world); !s)
+    return Status(s.code(), "loop correction: " + s.message());
+  moved = ekf_.pose() * before.inverse();
+  for (int id : ekf_.landmarkIds()) landmarks_.rotateView(id, moved.linear());
   return Status::ok();
 }
 

@@ -87,9 +87,10 @@ class SlamSystem final : public Estimator {
 
   // Every landmark ever initialised: in the state (current estimate) or retired.
   std::vector<MapLandmark> map() const override;
-  // Estimator::moveWorld: the filter (EkfSlam::transformWorld) and the views the landmarks of
-  // the state were initialised from (their template warps are relative to them).
-  Status moveWorld(const Eigen::Isometry3d& C_new_old) override;
+  // Estimator::applyLoopCorrection: EkfSlam::updatePose, then the views the landmarks of the
+  // state were initialised from turn with the pose (their template warps are relative to them).
+  Status applyLoopCorrection(const Eigen::Isometry3d& C_new_old, const Matrix6d& cov_world,
+                             Eigen::Isometry3d& moved) override;
 
  private:
   // Whether (u, v) lies within landmark_exclusion_px of one of `landmarks_uv` (px).

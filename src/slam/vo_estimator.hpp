@@ -17,7 +17,8 @@ class VoEstimator final : public Estimator {
                  StageObserver* observer = nullptr) override;
   TrackingFeedback feedback() const override { return vo_.feedback(); }
   // T_world_first <- C_new_old T_world_first: the published pose is T_world_first T_first_cam.
-  Status moveWorld(const Eigen::Isometry3d& C_new_old) override;
+  Status applyLoopCorrection(const Eigen::Isometry3d& C_new_old, const Matrix6d& cov_world,
+                             Eigen::Isometry3d& moved) override;
   StereoOdometry& odometry() { return vo_; }
 
  private:

@@ -285,6 +285,49 @@ TEST(EkfSlam, TransformWorldMovesStateAndCovarianceRigidly) {
   EXPECT_EQ(b.pose().matrix(), before.matrix());
 }
 
+// A direct pose measurement (loop-closing correction) against the dense textbook update on the
+// full state: x (+) K z, P - K H P with H = [I6 0], and the landmarks follow the pose through
+// their cross covariance.
+TEST(EkfSlam, PoseMeasurementMatchesDenseTextbookUpdate) {
+  std::mt19937 rng(37);
+  EkfSlam ekf = filledFilter(4, rng);
+  const MatrixXd P = ekf.covariance();
+  const int n = ekf.stateDim();
+  const Isometry3d T0 = ekf.pose();
+  std::vector<Vector3d> m0;
+  for (int id : ekf.landmarkIds()) {
+    Vector3d m;
+    Matrix3d C;
+    ASSERT_TRUE(ekf.landmark(id, m, C).isOk());
+    m0.push_back(m);
+  }
+  const Isometry3d T_meas = boxPlus(T0, (Vector6d() << 0.01, -0.02, 0.005, 0.3, -0.1, 0.2).finished());
+  Matrix6d R = Matrix6d::Identity() * 1e-3;
+  R(0, 0) = R(1, 1) = R(2, 2) = 1e-5;
+  MatrixXd H = MatrixXd::Zero(6, n);
+  H.leftCols<6>().setIdentity();
+  const MatrixXd S = H * P * H.transpose() + R;
+  const MatrixXd K = P * H.transpose() * S.inverse();
+  const Eigen::VectorXd dx = K * boxMinus(T_meas, T0);
+  const MatrixXd P_ref = P - K * H * P;
+  double d2 = -1;
+  ASSERT_TRUE(ekf.updatePose(T_meas, R, &d2).isOk());
+  EXPECT_NEAR(d2, boxMinus(T_meas, T0).dot(S.inverse() * boxMinus(T_meas, T0)), 1e-9);
+  EXPECT_LT((ekf.covariance() - P_ref).norm(), 1e-10 * P.norm());
+  EXPECT_TRUE(ekf.pose().isApprox(boxPlus(T0, dx.head<6>()), 1e-12));
+  for (std::size_t i = 0; i < m0.size(); ++i) {
+    Vector3d m;
+    Matrix3d C;
+    ASSERT_TRUE(ekf.landmark(ekf.landmarkIds()[i], m, C).isOk());
+    EXPECT_LT((m - (m0[i] + dx.segment<3>(6 + 3 * static_cast<int>(i)))).norm(), 1e-12);
+  }
+  EXPECT_GT((ekf.pose().translation() - T0.translation()).norm(), 1e-3);  // it moved
+  // A covariance that is not positive definite: refused, nothing changed.
+  const Isometry3d before = ekf.pose();
+  EXPECT_EQ(ekf.updatePose(T_meas, -R).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(ekf.pose().matrix(), before.matrix());
+}
+
 // Loop: landmarks near the start, a long excursion with prediction only, then re-perception of
 // the first landmarks (1 px matching error, seed 001 sec. 4.1): the pose covariance shrinks.
 // A landmark measured from an exactly known pose: the same as addLandmark on a filter whose
