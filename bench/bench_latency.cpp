@@ -207,10 +207,12 @@ int main(int argc, char** argv) {
         c.loop_enabled = true;
         c.loop_vocabulary = vocabulary;
       };
-      std::string loop_json;
+      std::string loop_json;  // stats.json's loop object without the list of loops
       const Outcome off = runOnce(mem.get(), 10.0, false, threads, 48, 112);
       const Outcome on = runOnce(mem.get(), 10.0, false, threads, 48, 112, with_loop, &loop_json);
       failures += !off.ok || !on.ok;
+      if (const std::size_t cut = loop_json.find(", \"accepted\""); cut != std::string::npos)
+        loop_json = loop_json.substr(0, cut) + "}";
       const rt::LatencySummary e_off = off.report.stage("estimator"), e_on = on.report.stage("estimator");
       std::printf(
           "{\"scenario\": \"loop10\", \"source\": \"%s\", \"rate_hz\": 10.0, \"published\": %lld, "

@@ -33,6 +33,9 @@ ConfigSection loopConfigSection() {
              "(6 dof) of the motion chain; 0: always the motion chain"),
       number("pair_chi2", SVSLAM_FIELD(loop.consistency.pair_chi2), 1e-3, 1e6, "",
              "chi-square (6 dof) bound of a loop pair's cycle through the odometry"),
+      number("max_solve_keyframes", SVSLAM_FIELD(loop.max_solve_keyframes), 0, 10000000, "",
+             "a solve moves only the newest this many keyframes (older ones held at their last "
+             "solution): bounds its time on long flights; 0 = the whole graph"),
       flag("feedback", SVSLAM_FIELD(loop_feedback),
            "true: after a solution the estimator (pose, landmarks of the state and their "
            "covariance) moves into the corrected frame; false: only the outputs and the LCM "

@@ -5,8 +5,9 @@
 //    keyframe's ORB points with their dense-stereo 3D covariance, the odometry covariance since
 //    the previous keyframe; each keyframe is handed to
 //  - the back end, a thread of its own behind a lock-free SPSC ring of keyframes: place
-//    recognition, geometric verification, PCM, and the Ceres pose graph. It never blocks the
-//    estimator (only the after-publication thread waits when the ring is full). After each
+//    recognition, geometric verification, PCM, and the Ceres pose graph, at nice +10. Live it
+//    never blocks the estimator (only the after-publication thread waits when the ring is
+//    full); replayed as fast as possible the estimator waits for it (Determinism). After each
 //    solution a pose_correction_t goes out on LCM (lcm.correction_channel) with the keyframes
 //    whose correction changed.
 // Feedback (loop.feedback): a solution made when the back end handled keyframe K (source frame

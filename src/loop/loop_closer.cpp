@@ -26,6 +26,8 @@ Status LoopCloserParams::validate() const {
     return Status::invalidArgument("loop.filter_edge_chi2 must be >= 0");
   if (solve_every_keyframes < 1)
     return Status::invalidArgument("loop.solve_every_keyframes must be >= 1");
+  if (max_solve_keyframes < 0)
+    return Status::invalidArgument("loop.max_solve_keyframes must be >= 0");
   if (!(odometry_floor_rot_rad > 0) || !std::isfinite(odometry_floor_rot_rad) ||
       !(odometry_floor_trans_m > 0) || !std::isfinite(odometry_floor_trans_m))
     return Status::invalidArgument("loop.odometry_floor_rot_rad and _trans_m must be > 0");
@@ -282,7 +284,10 @@ Status LoopCloser::optimise() {
     edges.push_back(e);
   }
   PoseGraphReport rep;
-  if (Status s = graph_.optimize(poses, edges, 0, rep); !s) return s;
+  const int n = static_cast<int>(poses.size());
+  const int first_free =
+      params_.max_solve_keyframes > 0 ? std::max(0, n - params_.max_solve_keyframes) : 0;
+  if (Status s = graph_.optimize(poses, edges, 0, rep, first_free); !s) return s;
   T_corrected_ = poses;
   solved_ = true;
   pending_ = false;

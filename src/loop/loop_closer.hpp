@@ -73,6 +73,10 @@ struct LoopCloserParams {
   // After the first solution, the graph is re-solved when new loops were accepted and at least
   // this many keyframes arrived since the last solution (finish() solves what is pending), >= 1.
   int solve_every_keyframes = 5;
+  // Bound of a solve: with more keyframes than this, only the newest this many move and the
+  // older ones are held at their last solution (PoseGraph::optimize's first_free), so a solve
+  // costs what a graph of this size costs however long the flight. 0 = the whole graph. >= 0.
+  int max_solve_keyframes = 2000;
   // Odometry edge: the online estimate's relative pose between the two keyframes when it agrees
   // with the motion chain (Mahalanobis^2 under the chain's covariance below this), else the
   // chain (the filter jumped, e.g. when first-frame anchors came back: a jump inside an edge

@@ -69,13 +69,16 @@ PoseGraph::PoseGraph(const PoseGraphParams& params) : params_(params) {
 
 Status PoseGraph::optimize(std::vector<Eigen::Isometry3d>& T_world_kf,
                            const std::vector<PoseGraphEdge>& edges, int fixed_index,
-                           PoseGraphReport& report) {
+                           PoseGraphReport& report, int first_free) {
   if (!init_status_) return init_status_;
   const int n = static_cast<int>(T_world_kf.size());
   if (n == 0) return Status::invalidArgument("pose graph: no keyframe pose");
   if (edges.empty()) return Status::invalidArgument("pose graph: no edge");
   if (fixed_index < 0 || fixed_index >= n)
     return Status::invalidArgument("pose graph: fixed_index out of range");
+  if (first_free < 0 || first_free >= n)
+    return Status::invalidArgument("pose graph: first_free out of range");
+  const auto constant = [&](int k) { return k == fixed_index || k < first_free; };
   for (int k = 0; k < n; ++k)
     if (!isValidPose(T_world_kf[k]))
       return Status::invalidArgument("pose graph: pose " + std::to_string(k) +
@@ -112,6 +115,7 @@ Status PoseGraph::optimize(std::vector<Eigen::Isometry3d>& T_world_kf,
   for (std::size_t i = 0; i < edges.size(); ++i) {
     const PoseGraphEdge& e = edges[i];
     sqrt_info[i] = whitening(e.covariance);
+    if (constant(e.from) && constant(e.to)) continue;  // a constant term
     auto* cost = new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 4, 3, 4, 3>(
         new RelativePoseCost(e.T_from_to, sqrt_info[i]));
     ceres::LossFunction* loss = nullptr;
@@ -125,8 +129,11 @@ Status PoseGraph::optimize(std::vector<Eigen::Isometry3d>& T_world_kf,
     if (!problem.HasParameterBlock(q)) continue;
     problem.SetManifold(q, new ceres::EigenQuaternionManifold);
   }
-  problem.SetParameterBlockConstant(&quaternions_[4 * fixed_index]);
-  problem.SetParameterBlockConstant(&translations_[3 * fixed_index]);
+  for (int k = 0; k < n; ++k) {
+    if (!constant(k) || !problem.HasParameterBlock(&quaternions_[4 * k])) continue;
+    problem.SetParameterBlockConstant(&quaternions_[4 * k]);
+    problem.SetParameterBlockConstant(&translations_[3 * k]);
+  }
 
   ceres::Solver::Options options;
   options.max_num_iterations = params_.max_iterations;
@@ -155,7 +162,7 @@ Status PoseGraph::optimize(std::vector<Eigen::Isometry3d>& T_world_kf,
     return Status(StatusCode::kInternal, "pose graph: Ceres failed: " + summary.message);
 
   for (int k = 0; k < n; ++k) {
-    if (k == fixed_index) continue;  // bit for bit as given
+    if (constant(k)) continue;  // bit for bit as given
     const Eigen::Quaterniond q =
         Eigen::Map<const Eigen::Quaterniond>(&quaternions_[4 * k]).normalized();
     T_world_kf[k].setIdentity();

@@ -65,9 +65,12 @@ class PoseGraph {
   // no edge; fixed_index or an edge index out of range; from == to; a pose not finite or not a
   // rotation; a covariance not finite, symmetric and positive definite; a pose not connected to
   // fixed_index through the edges (its gauge would be free). internal when Ceres fails.
+  // first_free > 0: the poses before it are held constant as well (a window solve: only the
+  // newest keyframes move, the loops into older ones pull them against a fixed past) and edges
+  // between two constant poses are left out, so the cost grows with n - first_free, not n.
   Status optimize(std::vector<Eigen::Isometry3d>& T_world_kf,
                   const std::vector<PoseGraphEdge>& edges, int fixed_index,
-                  PoseGraphReport& report);
+                  PoseGraphReport& report, int first_free = 0);
 
  private:
   PoseGraphParams params_;

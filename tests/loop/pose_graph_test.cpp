@@ -107,6 +107,31 @@ TEST(PoseGraph, LoopEdgesRemoveTheDrift) {
   EXPECT_LE(sum_ate_opt, 0.4 * sum_ate_odo);
 }
 
+// A window solve (first_free): the poses before the window stay bit for bit, the ones inside
+// still lose the drift at the end (the loops pull them to the constant past), and the result is
+// close to the whole graph's solution at the end; first_free out of range is refused.
+TEST(PoseGraph, WindowSolveHoldsThePastAndStillClosesTheLoop) {
+  const auto s = loop_test::makeScene(kKeyframes, kPerLap, odoCov(), 23);
+  auto full = s.odometry, window = s.odometry;
+  PoseGraph graph(PoseGraphParams{});
+  PoseGraphReport report;
+  ASSERT_TRUE(graph.optimize(full, loopGraph(s), 0, report).isOk());
+  // Keyframes 0..59 held: the loops 92->2, 95->5, 99->9 reach into the held past.
+  ASSERT_TRUE(graph.optimize(window, loopGraph(s), 0, report, 60).isOk());
+  for (int k = 0; k < 60; ++k) EXPECT_TRUE(window[k].matrix() == s.odometry[k].matrix()) << k;
+  const double end_odo = (s.odometry.back().translation() - s.truth.back().translation()).norm();
+  const double end_win = (window.back().translation() - s.truth.back().translation()).norm();
+  const double end_full = (full.back().translation() - s.truth.back().translation()).norm();
+  std::printf("end error: odometry %.3f m, whole graph %.3f m, window of 40 %.3f m\n", end_odo,
+              end_full, end_win);
+  EXPECT_LT(end_win, 0.15 * end_odo);
+  EXPECT_LT(end_win, 0.2);
+  EXPECT_EQ(graph.optimize(window, loopGraph(s), 0, report, kKeyframes).code(),
+            StatusCode::kInvalidArgument);
+  EXPECT_EQ(graph.optimize(window, loopGraph(s), 0, report, -1).code(),
+            StatusCode::kInvalidArgument);
+}
+
 // A wrong loop (keyframes 20 and 60, some 35 m apart, said to be 1 m apart): with the Cauchy
 // loss its chi2 stands out and the trajectory stays close to the one without it; without the
 // robust loss it drags the trajectory away.
