@@ -97,23 +97,25 @@ Status EkfSlam::transformWorld(const Eigen::Isometry3d& C_new_old) {
   return Status::ok();
 }
 
-Status EkfSlam::updatePose(const Eigen::Isometry3d& T_meas, const Matrix6d& R_meas, double* d2) {
+Status EkfSlam::updatePosition(const Eigen::Vector3d& t_meas, const Eigen::Matrix3d& R_meas,
+                               double* d2) {
   if (!init_status_) return init_status_;
-  if (Status s = checkRigid(T_meas, "updatePose: T_meas"); !s) return s;
-  if (Status s = checkCovariance<6>(R_meas, true, "updatePose: R_meas"); !s) return s;
+  if (!t_meas.allFinite()) return Status::invalidArgument("updatePosition: t_meas is not finite");
+  if (Status s = checkCovariance<3>(R_meas, true, "updatePosition: R_meas"); !s) return s;
   const int n = stateDim();
-  gatherColumns(0, 6, P_pose_);  // M = P[:, pose], n x 6
-  const auto M = P_pose_.topRows(n);
-  Matrix6d S = M.topRows<6>() + R_meas;
+  gatherColumns(3, 3, P_lm_);  // M = P[:, t], n x 3
+  const auto M = P_lm_.topRows(n);
+  Eigen::Matrix3d S = M.middleRows<3>(3) + R_meas;
   S = 0.5 * (S + S.transpose()).eval();
-  const Eigen::LLT<Matrix6d> llt(S);
+  const Eigen::LLT<Eigen::Matrix3d> llt(S);
   if (llt.info() != Eigen::Success)
-    return Status(StatusCode::kInternal, "updatePose: innovation covariance not positive definite");
-  const Vector6d z = boxMinus(T_meas, T_world_cam_);
-  // K^T = S^-1 M^T (6 x n, allocated: one call per loop correction), then P <- P - M K^T on
+    return Status(StatusCode::kInternal,
+                  "updatePosition: innovation covariance not positive definite");
+  const Eigen::Vector3d z = t_meas - T_world_cam_.translation();
+  // K^T = S^-1 M^T (3 x n, allocated: one call per loop correction), then P <- P - M K^T on
   // the lower triangle, column by column.
-  const Eigen::MatrixXd Kt = llt.solve(M.transpose());  // 6 x n = S^-1 M^T = K^T
-  if (!Kt.allFinite()) return Status(StatusCode::kInternal, "updatePose: non-finite gain");
+  const Eigen::MatrixXd Kt = llt.solve(M.transpose());
+  if (!Kt.allFinite()) return Status(StatusCode::kInternal, "updatePosition: non-finite gain");
   dx_.head(n).noalias() = Kt.transpose() * z;
   for (int j = 0; j < n; ++j)
     P_.block(j, j, n - j, 1).noalias() -= M.bottomRows(n - j) * Kt.col(j);

@@ -142,14 +142,15 @@ class EkfSlam {
   // estimate and its uncertainty together: every relative quantity (landmark in the camera,
   // its predicted observation and innovation covariance) is unchanged. O(n^2); allocates nothing.
   Status transformWorld(const Eigen::Isometry3d& C_new_old);
-  // Update with a direct measurement of the pose, T_meas with covariance R_meas ([dtheta, dt],
-  // symmetric positive definite; e.g. the loop-closing back end's corrected pose): the filter's
-  // own convention, z = boxMinus(T_meas, T_wc) = H dx + v with H = [I6 0 ... 0], so
-  //     S = P_pp + R_meas,  K = P[:, pose] S^-1,  x <- x (+) K z,  P <- P - K P[pose, :]
-  // (the Joseph form and the optimal-gain form agree exactly for this K). The landmarks move
-  // with the pose through their cross covariance. d2 (when not null): z^T S^-1 z.
-  Status updatePose(const Eigen::Isometry3d& T_meas, const Matrix6d& R_meas,
-                    double* d2 = nullptr);
+  // Update with a direct measurement of the camera position, t_meas (m, world) with covariance
+  // R_meas (m^2, symmetric positive definite; e.g. the loop-closing back end's corrected
+  // position): z = t_meas - t_wc = H dx + v with H = [0 I3 0 ... 0], so
+  //     S = P_tt + R_meas,  K = P[:, t] S^-1,  x <- x (+) K z,  P <- P - K P[t, :]
+  // (the Joseph form and the optimal-gain form agree exactly for this K). The attitude and the
+  // landmarks move with the position through their cross covariances. d2 (when not null):
+  // z^T S^-1 z (3 dof).
+  Status updatePosition(const Eigen::Vector3d& t_meas, const Eigen::Matrix3d& R_meas,
+                        double* d2 = nullptr);
 
   const Eigen::Isometry3d& pose() const { return T_world_cam_; }
   Matrix6d poseCovariance() const;  // [dtheta (rad), dt (m)]

@@ -74,9 +74,9 @@ class Estimator {
   virtual std::vector<MapLandmark> map() const { return {}; }
   // Loop closing's correction (pipeline/realtime/loop_stage.hpp): the back end puts the current
   // pose at C_new_old T_world_cam with covariance cov_world ([dtheta, dt], world frame).
-  //   ekf: a pose measurement update (EkfSlam::updatePose): the filter moves as far as that
-  //        covariance against its own says, the landmarks of the state with it through their
-  //        cross covariance, and the pose covariance shrinks;
+  //   ekf: the corrected position as a measurement (EkfSlam::updatePosition): the filter moves
+  //        as far as that covariance against its own says, its attitude and the landmarks of
+  //        the state with it through their cross covariances, and its covariance shrinks;
   //   vo:  the chained pose moves by C_new_old (it has no covariance to weigh it with).
   // `moved` receives the world-frame move of the pose, T_after T_before^-1. Landmarks out of the
   // state stay where they are (anchors are in the frame of the first pose, which loop closing

@@ -172,7 +172,9 @@ Status SlamSystem::applyLoopCorrection(const Eigen::Isometry3d& C_new_old,
   if (!C_new_old.matrix().allFinite())
     return Status::invalidArgument("loop correction: C_new_old is not finite");
   const Eigen::Isometry3d before = ekf_.pose();
-  if (Status s = ekf_.updatePose(C_new_old * before, cov_world); !s)
+  if (Status s = ekf_.updatePosition((C_new_old * before).translation(),
+                                     cov_world.bottomRightCorner<3, 3>());
+      !s)
     return Status(s.code(), "loop correction: " + s.message());
   moved = ekf_.pose() * before.inverse();
   for (int id : ekf_.landmarkIds()) landmarks_.rotateView(id, moved.linear());

@@ -87,8 +87,13 @@ class SlamSystem final : public Estimator {
 
   // Every landmark ever initialised: in the state (current estimate) or retired.
   std::vector<MapLandmark> map() const override;
-  // Estimator::applyLoopCorrection: EkfSlam::updatePose, then the views the landmarks of the
-  // state were initialised from turn with the pose (their template warps are relative to them).
+  // Estimator::applyLoopCorrection: the corrected position as a measurement
+  // (EkfSlam::updatePosition), then the views the landmarks of the state were initialised from
+  // turn with the pose (their template warps are relative to them). Position only: the filter
+  // observes its attitude directly from landmarks spread over the view, better than a keyframe
+  // rotation through one loop constraint; drift accumulates in the position (on the synthetic
+  // 3-lap and look-alike flights the full pose measurement gave a larger online ATE,
+  // docs/loop_closing.md).
   Status applyLoopCorrection(const Eigen::Isometry3d& C_new_old, const Matrix6d& cov_world,
                              Eigen::Isometry3d& moved) override;
 
