@@ -5,7 +5,9 @@
 # are corrected) and with feedback (the default). Prints one line per run: the online trajectory
 # (trajectory_kitti.txt: what was published) and the optimised one (trajectory_optimized_kitti.txt),
 # ATE and final position error against ground truth with --align none, loops accepted, loops
-# between camera centres more than 25 m apart (false), feedback moves.
+# between camera centres more than 25 m apart (false), feedback moves; then the elevation map's
+# height RMSE and coverage against groundtruth_dem.tif (svslam eval-dem): dem.tif (online) and
+# dem_optimized.tif (re-placed with the corrected trajectory).
 # Usage: scripts/loop_figures.sh [--quick] [BUILD_DIR]   (--quick: the 270 m loop at 512x384 only)
 set -euo pipefail
 quick=0
@@ -33,6 +35,16 @@ score() {  # RUN_DIR TRAJECTORY -> "ate final"
 import json, sys
 d = json.load(open(sys.argv[1]))
 print("%.4f %.4f" % (d["ate_rmse_m"], d["final_pos_err_m"]))
+EOF
+}
+
+dem_score() {  # RUN_DIR DEM_FILE -> "rmse coverage" ("- -" when the file is absent)
+  if [[ ! -s "$1/$2" ]]; then echo "- -"; return; fi
+  "$svslam" eval-dem --dem "$1/$2" --gt "$1/groundtruth_dem.tif" > "$1/eval_$2.json"
+  python3 - "$1/eval_$2.json" <<'EOF'
+import json, sys
+d = json.load(open(sys.argv[1]))
+print("%.4f %.4f" % (d["rmse_m"], d["coverage"]))
 EOF
 }
 
@@ -72,8 +84,11 @@ flight() {  # NAME WIDTH HEIGHT SOURCE_EXTRA
       optimised=$(score "$out" trajectory_optimized_kitti.txt)
       loops=$(false_loops "$out")
     fi
-    printf '%-14s %-10s online ATE/final %s  optimised ATE/final %s  loops/false/moves %s\n' \
-      "$name" "$mode" "$online" "$optimised" "$loops"
+    local dem dem_opt
+    dem=$(dem_score "$out" dem.tif)
+    dem_opt=$(dem_score "$out" dem_optimized.tif)
+    printf '%-14s %-10s online ATE/final %s  optimised ATE/final %s  loops/false/moves %s  DEM rmse/coverage %s  optimised %s\n' \
+      "$name" "$mode" "$online" "$optimised" "$loops" "$dem" "$dem_opt"
   done
 }
 

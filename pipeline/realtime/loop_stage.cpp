@@ -1,5 +1,6 @@
 #include "pipeline/realtime/loop_stage.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <limits>
 
@@ -414,6 +415,18 @@ Status LoopStage::finish(const std::vector<MapLandmark>& map) {
   return map.empty() ? Status::ok() : m.writeLandmarks(map);
 }
 
+bool LoopStage::frameCorrection(std::int64_t frame, Eigen::Isometry3d& M) const {
+  const Impl& m = *impl_;
+  if (!m.closer || !m.closer->solved() || m.closer->keyframes().empty()) return false;
+  const std::vector<Keyframe>& kfs = m.closer->keyframes();
+  // The keyframe at or before `frame` (the first one for a frame before it).
+  const auto it = std::upper_bound(kfs.begin(), kfs.end(), frame,
+                                   [](std::int64_t f, const Keyframe& k) { return f < k.frame; });
+  const std::size_t k = it == kfs.begin() ? 0 : static_cast<std::size_t>(it - kfs.begin()) - 1;
+  M = m.keyframeCorrection(k) * m.appliedBetween(kfs[k].frame, frame).inverse();
+  return true;
+}
+
 std::string LoopStage::json() const {
   const Impl& m = *impl_;
   cli::JsonObject o;
@@ -480,6 +493,7 @@ void LoopStage::correctionApplied(std::int64_t, const Eigen::Isometry3d&) {}
 void LoopStage::setWaitForBackEnd(bool) {}
 void LoopStage::stopFeedback() {}
 Status LoopStage::finish(const std::vector<MapLandmark>&) { return Status::ok(); }
+bool LoopStage::frameCorrection(std::int64_t, Eigen::Isometry3d&) const { return false; }
 std::string LoopStage::json() const { return "{}"; }
 
 #endif

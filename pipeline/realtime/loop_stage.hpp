@@ -24,7 +24,9 @@
 // and trajectory_optimized_tum.txt, the published trajectory (trajectory_tum.txt) with every
 // pose moved by the correction of its time (LoopCloser::correctionAt), and
 // landmarks_optimized.ply: every landmark of the map moved the same way from the keyframe at or
-// before the frame it was last seen (C_k B_s^-1, B_s the moves applied after f_k up to then).
+// before the frame it was last seen (C_k B_s^-1, B_s the moves applied after f_k up to then);
+// the mapper re-places the elevation map with the same corrections (frameCorrection,
+// dem_optimized.tif: map_stage.hpp).
 // Determinism: the back end sees every keyframe in order; replayed as fast as possible the
 // front end sees every frame and the estimator, before frame f, waits until the back end has
 // handled every keyframe made up to frame f - D, so which moves apply where does not depend on
@@ -74,6 +76,11 @@ class LoopStage {
   // After the run: drains the back end, joins it, writes the optimised trajectory files and,
   // from `map` (the estimator's landmarks at the end; empty: none), landmarks_optimized.ply.
   Status finish(const std::vector<MapLandmark>& map);
+  // After finish(): the world-frame correction M of a pose the estimator published at `frame`
+  // (T_corrected = M T_online), as for landmarks_optimized.ply: the correction of the keyframe
+  // at or before that frame, less the feedback moves applied after it up to the frame. False
+  // when no loop was closed (nothing to correct).
+  bool frameCorrection(std::int64_t frame, Eigen::Isometry3d& M) const;
   // stats.json's "loop" object.
   std::string json() const;
   const run::StageTimes& times() const { return times_; }

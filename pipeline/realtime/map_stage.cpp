@@ -5,6 +5,7 @@
 
 #include "drivers/files/dem_files.hpp"
 #include "drivers/lcm/lcm_map_tile.hpp"
+#include "map/dem_replacer.hpp"
 #include "map/map_frame.hpp"
 #include "pipeline/cli/json_writer.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
@@ -26,7 +27,9 @@ Status MapStage::init(bool pose_covariance) {
     gravity_from_ = "source";
   }
   if (Status s = map::mapRotationFromGravity(g, R_map_world_); !s) return s;
-  map_ = std::make_unique<map::DemMap>(cfg_.dem);
+  map::DemParams dem = cfg_.dem;
+  dem.keep_cell_sources = cfg_.loop_enabled;  // for writeReplaced
+  map_ = std::make_unique<map::DemMap>(dem);
   if (Status s = map_->initStatus(); !s) return s;
   fuser_ = std::make_unique<map::DemFuser>(cfg_.dem, source_.calibration(), R_map_world_);
   return fuser_->initStatus();
@@ -44,6 +47,12 @@ Status MapStage::process(FrameSlot& slot) {
   map::DemFuseStats st;
   if (Status s = fuser_->process(in, *map_, st); !s)
     return Status(s.code(), "map, frame " + std::to_string(slot.frame.index) + ": " + s.message());
+  if (st.seq >= 0 && map_->params().keep_cell_sources) {
+    // Sequence numbers count up from 0 with every frame that reached the grid.
+    if (st.seq != static_cast<std::int64_t>(fused_frames_.size()))
+      return Status(StatusCode::kInternal, "map: fusion sequence out of step");
+    fused_frames_.push_back(slot.frame.index);
+  }
   if (st.skipped == map::DemSkip::kNone)
     ++frames_fused_;
   else
@@ -137,6 +146,47 @@ Status MapStage::finish() {
   return writeFiles(out_dir_);
 }
 
+Status MapStage::writeReplaced(
+    const std::function<bool(std::int64_t, Eigen::Isometry3d&)>& correction) {
+  if (!map_ || !map_->params().keep_cell_sources) return Status::ok();
+  std::vector<Eigen::Isometry3d> C(fused_frames_.size(), Eigen::Isometry3d::Identity());
+  bool any = false;
+  for (std::size_t s = 0; s < C.size(); ++s) any = correction(fused_frames_[s], C[s]) || any;
+  if (!any) return Status::ok();
+  const std::int64_t t0 = steadyNowNs();
+  map::DemReplacer replacer(map::DemReplacerParams{}, R_map_world_);
+  map::DemParams out_params = map_->params();
+  out_params.keep_cell_sources = false;
+  map::DemMap out(out_params);
+  map::DemReplaceStats st;
+  if (Status s = replacer.process(*map_, C, out, st); !s)
+    return Status(s.code(), "map re-placement: " + s.message());
+  map::DemRaster r;
+  out.toRaster(r);
+  drivers::GeoOrigin geo;
+  const drivers::GeoOrigin* g = nullptr;
+  if (cfg_.map_geo_origin) {
+    geo = {(*cfg_.map_geo_origin)[0], (*cfg_.map_geo_origin)[1], (*cfg_.map_geo_origin)[2]};
+    g = &geo;
+  }
+  const std::string dir = out_dir_ + "/";
+  if (Status s = drivers::writeDemGeoTiff(dir + run::files::kDemOptimized, r, g); !s) return s;
+  if (Status s = drivers::writeOrthoTiff(dir + run::files::kOrthoOptimizedTiff, r, g); !s)
+    return s;
+  if (Status s = drivers::writeOrthoPng(dir + run::files::kOrthoOptimizedPng, r); !s) return s;
+  cli::JsonObject j;
+  j.add("cells_in", st.cells_in)
+      .add("cells_out", st.cells_out)
+      .add("cells_unmoved", st.cells_no_source)
+      .add("cells_no_tile", st.cells_no_tile)
+      .add("max_shift_m", st.max_shift_m, 4)
+      .add("rms_shift_m", st.rms_shift_m, 4)
+      .add("rms_dz_m", st.rms_dz_m, 4)
+      .add("ms", static_cast<double>(steadyNowNs() - t0) * 1e-6, 1);
+  replaced_json_ = j.str();
+  return Status::ok();
+}
+
 std::string MapStage::json(std::int64_t skipped_busy) const {
   cli::JsonObject reasons;
   for (const auto& [reason, n] : not_fused_) reasons.add(reason, n);
@@ -155,6 +205,7 @@ std::string MapStage::json(std::int64_t skipped_busy) const {
       .add("cell_bytes", static_cast<std::int64_t>(map_ ? map_->bytes() : 0))
       .add("tiles_published", tiles_published_)
       .add("map_median_ms", times_.median("map"), 3);
+  if (!replaced_json_.empty()) j.addRaw("replaced", replaced_json_);
   return j.str();
 }
 

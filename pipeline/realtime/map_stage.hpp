@@ -9,7 +9,13 @@
 // command: dem.tif (height, height sigma, count), ortho.tif, ortho.png, dem_hillshade.png, and
 // with a source that knows its terrain (synthetic) groundtruth_dem.tif on the same grid. On LCM,
 // every map.publish_period_s, each tile changed since the last period as a map_tile_t.
+// With loop closing (loop.enabled) every cell remembers the frame that weighed most in it, and
+// after the run, when loops were closed, writeReplaced() re-places the map with the corrected
+// trajectory (src/map/dem_replacer.hpp): dem_optimized.tif, ortho_optimized.tif and
+// ortho_optimized.png beside the online map.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <functional>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -44,6 +50,9 @@ class MapStage {
   void requestSave(const std::string& dir, std::int64_t command_seq, const std::string& prefix);
   // After the run: writes the map files into the output folder (and answers a pending save).
   Status finish();
+  // After finish() and loop closing's finish: the map re-placed, each fused frame f moved by
+  // correction(f, M) (T_corrected = M T_online; false for every frame: nothing is written).
+  Status writeReplaced(const std::function<bool(std::int64_t, Eigen::Isometry3d&)>& correction);
   // stats.json's "map" object; `skipped_busy`: frames the runner skipped for this stage.
   std::string json(std::int64_t skipped_busy) const;
   const map::DemMap& map() const { return *map_; }
@@ -77,6 +86,8 @@ class MapStage {
     std::int64_t fused = 0, gated = 0, not_finite = 0, out_of_range = 0, no_tile = 0;
   } totals_;  // points
   run::StageTimes times_;
+  std::vector<std::int64_t> fused_frames_;  // source frame of each fusion (by sequence number)
+  std::string replaced_json_;               // stats.json's map.replaced, once written
   // Pending save_map.
   std::mutex save_mutex_;
   std::string save_dir_, save_prefix_;

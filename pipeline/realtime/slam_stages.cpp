@@ -290,6 +290,13 @@ Status SlamStages::finish() {
                                               ? estimator_->map()
                                               : std::vector<MapLandmark>{});
     if (s) s = ls;
+    if (map_stage_) {
+      const Status rs = map_stage_->writeReplaced(
+          [this](std::int64_t frame, Eigen::Isometry3d& M) {
+            return loop_stage_->frameCorrection(frame, M);
+          });
+      if (s) s = rs;
+    }
   }
   return s;
 }

@@ -39,11 +39,15 @@ inline constexpr const char* kLatency = "latency.txt";
 inline constexpr const char* kTrajectoryOptimizedKitti = "trajectory_optimized_kitti.txt";
 inline constexpr const char* kTrajectoryOptimizedTum = "trajectory_optimized_tum.txt";
 inline constexpr const char* kLandmarksOptimized = "landmarks_optimized.ply";
+inline constexpr const char* kDemOptimized = "dem_optimized.tif";
+inline constexpr const char* kOrthoOptimizedTiff = "ortho_optimized.tif";
+inline constexpr const char* kOrthoOptimizedPng = "ortho_optimized.png";
 // `svslam plot` writes its pictures into the run folder by default: they belong to the run.
 inline constexpr const char* kAll[] = {
     kTrajectoryKitti, kTrajectoryTum, kGroundTruthKitti, kPoseCovariance, kLandmarks, kStats, kDem,
     kOrthoTiff,       kOrthoPng,      kHillshade,        kGroundTruthDem, kLatency,
-    kTrajectoryOptimizedKitti, kTrajectoryOptimizedTum, kLandmarksOptimized,
+    kTrajectoryOptimizedKitti, kTrajectoryOptimizedTum, kLandmarksOptimized, kDemOptimized,
+    kOrthoOptimizedTiff, kOrthoOptimizedPng,
     "trajectory_top.png", "trajectory_top.svg", "altitude.png", "altitude.svg", "landmarks.png",
     "landmarks.svg", "latency.png", "latency.svg"};
 }  // namespace files

@@ -228,6 +228,7 @@ Status DemFuser::process(const DemFrame& in, DemMap& map, DemFuseStats& out) {
   }
   // Each frame cell into the map, tile by tile (one tile lookup per tile, not per cell).
   const std::int64_t seq = seq_++;
+  out.seq = seq;
   const int n = map.tileCells();
   const int ti0 = map.tileOf(bi0_), ti1 = map.tileOf(bi0_ + bcols_ - 1);
   const int tj0 = map.tileOf(bj0_), tj1 = map.tileOf(bj0_ + brows_ - 1);
@@ -250,8 +251,9 @@ Status DemFuser::process(const DemFrame& in, DemMap& map, DemFuseStats& out) {
             out.points_no_tile += static_cast<int>(m.count);
             continue;
           }
-          DemMap::fuseCell(t->cells[static_cast<std::size_t>((j - tj * n) * n + (i - ti * n))], m,
-                           params_.reject_variance_factor);
+          const auto k = static_cast<std::size_t>((j - tj * n) * n + (i - ti * n));
+          DemMap::fuseCell(t->cells[k], m, params_.reject_variance_factor);
+          DemMap::recordSource(*t, k, seq, m);
           ++out.cells_updated;
           out.points_fused += static_cast<int>(m.count);
         }

@@ -77,6 +77,7 @@ DemTile* DemMap::tileForWrite(int ti, int tj) {
   t.tj = tj;
   const auto n = static_cast<std::size_t>(params_.tile_cells);
   t.cells.assign(n * n, DemCell{});
+  if (params_.keep_cell_sources) t.sources.assign(n * n, CellSource{});
   const int slot = static_cast<int>(tiles_.size());
   tiles_.push_back(std::move(t));
   index_.emplace(key(ti, tj), slot);
@@ -112,8 +113,9 @@ bool DemMap::fuse(int i, int j, const CellMeasurement& m, std::int64_t seq, std:
   DemTile* t = tileForWrite(ti, tj);
   if (t == nullptr) return false;
   const int n = params_.tile_cells;
-  fuseCell(t->cells[static_cast<std::size_t>((j - tj * n) * n + (i - ti * n))], m,
-           params_.reject_variance_factor);
+  const auto k = static_cast<std::size_t>((j - tj * n) * n + (i - ti * n));
+  fuseCell(t->cells[k], m, params_.reject_variance_factor);
+  recordSource(*t, k, seq, m);
   touch(*t, seq, t_ns);
   return true;
 }
@@ -143,6 +145,13 @@ void DemMap::fuseCell(DemCell& c, const CellMeasurement& m, double reject_varian
   c.count = static_cast<std::uint16_t>(std::min<double>(n_new, kMaxCount));
 }
 
+void DemMap::recordSource(DemTile& t, std::size_t k, std::int64_t seq, const CellMeasurement& m) {
+  if (t.sources.empty() || m.count == 0) return;
+  CellSource& src = t.sources[k];
+  const auto w = static_cast<float>(m.sum_w);
+  if (src.seq < 0 || w >= src.sum_w) src = {static_cast<std::int32_t>(seq), w};
+}
+
 void DemMap::touch(DemTile& t, std::int64_t seq, std::int64_t t_ns) {
   if (t.first_seq < 0) t.first_seq = seq;
   t.last_seq = seq;
@@ -151,7 +160,9 @@ void DemMap::touch(DemTile& t, std::int64_t seq, std::int64_t t_ns) {
 
 std::size_t DemMap::bytes() const {
   const auto n = static_cast<std::size_t>(params_.tile_cells);
-  return tiles_.size() * n * n * sizeof(DemCell);
+  const std::size_t per_cell =
+      sizeof(DemCell) + (params_.keep_cell_sources ? sizeof(CellSource) : 0);
+  return tiles_.size() * n * n * per_cell;
 }
 
 void DemMap::fillRaster(const DemTile& t, DemRaster& out) const {

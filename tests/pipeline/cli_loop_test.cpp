@@ -1,7 +1,8 @@
 // Loop closing in `svslam run` end to end: a vocabulary trained with `svslam train-vocabulary
 // --source` on one synthetic flight, then a two-lap flight over other terrain: the back end
 // accepts loops (all between views of the same ground), writes trajectory_optimized_*.txt with
-// one pose per published pose, and the result is the same threaded and sequential. Bad loop
+// one pose per published pose and dem_optimized.tif, and the result is the same threaded and
+// sequential. Bad loop
 // configuration gives a clear error and a non-zero exit.
 #include <gtest/gtest.h>
 
@@ -35,7 +36,7 @@ class CliLoop : public ::testing::Test {
     ASSERT_EQ(code, 0) << slurp(dir_ / "err.txt");
     std::ofstream(dir_ / "loop.yaml") << "loop:\n  enabled: true\n  vocabulary: "
                                       << (dir_ / "v.svvoc").string()
-                                      << "\n  exclude_recent: 8\nmap:\n  enabled: false\n";
+                                      << "\n  exclude_recent: 8\n";
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
   static int run(const std::string& args, std::string& err) {
@@ -103,6 +104,11 @@ TEST_F(CliLoop, TwoLapsCloseLoopsAndWriteTheOptimisedTrajectory) {
   EXPECT_EQ(slurp(a / "trajectory_kitti.txt"), slurp(b / "trajectory_kitti.txt"));
   EXPECT_EQ(slurp(a / "landmarks_optimized.ply"), slurp(b / "landmarks_optimized.ply"));
   EXPECT_EQ(lines(a / "landmarks_optimized.ply").size(), lines(a / "landmarks.ply").size());
+  // The elevation map re-placed with the corrected trajectory, the same both ways.
+  ASSERT_TRUE(fs::exists(a / "dem_optimized.tif"));
+  EXPECT_TRUE(fs::exists(a / "ortho_optimized.png"));
+  EXPECT_EQ(slurp(a / "dem_optimized.tif"), slurp(b / "dem_optimized.tif"));
+  EXPECT_NE(stats.find("\"replaced\": {\"cells_in\": "), std::string::npos) << stats;
 }
 
 TEST_F(CliLoop, BadLoopConfigurationIsNamed) {
