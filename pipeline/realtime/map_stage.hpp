@@ -9,7 +9,7 @@
 // command: dem.tif (height, height sigma, count), ortho.tif, ortho.png, dem_hillshade.png, and
 // with a source that knows its terrain (synthetic) groundtruth_dem.tif on the same grid. On LCM,
 // every map.publish_period_s, each tile changed since the last period as a map_tile_t.
-// With loop closing (loop.enabled) every cell remembers the frame that weighed most in it, and
+// With loop closing (loop.enabled) every cell remembers the latest frame that wrote into it, and
 // after the run, when loops were closed, writeReplaced() re-places the map with the corrected
 // trajectory (src/map/dem_replacer.hpp): dem_optimized.tif, ortho_optimized.tif and
 // ortho_optimized.png beside the online map.

@@ -253,7 +253,7 @@ Status DemFuser::process(const DemFrame& in, DemMap& map, DemFuseStats& out) {
           }
           const auto k = static_cast<std::size_t>((j - tj * n) * n + (i - ti * n));
           DemMap::fuseCell(t->cells[k], m, params_.reject_variance_factor);
-          DemMap::recordSource(*t, k, seq, m);
+          DemMap::recordSource(*t, k, seq);
           ++out.cells_updated;
           out.points_fused += static_cast<int>(m.count);
         }

@@ -55,7 +55,7 @@ struct DemFuseStats {
   int points_out_of_range = 0;  // d < min_disparity_px, range > max_range_m or too high
   int points_no_tile = 0;       // their tile would exceed max_tiles
   int cells_updated = 0;
-  // The fusion sequence number the frame was fused under (tiles' first/last_seq, CellSource);
+  // The fusion sequence number the frame was fused under (tiles' first/last_seq and sources);
   // -1 when it was not (skipped, or no point reached the grid).
   std::int64_t seq = -1;
 };

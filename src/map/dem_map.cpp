@@ -77,7 +77,7 @@ DemTile* DemMap::tileForWrite(int ti, int tj) {
   t.tj = tj;
   const auto n = static_cast<std::size_t>(params_.tile_cells);
   t.cells.assign(n * n, DemCell{});
-  if (params_.keep_cell_sources) t.sources.assign(n * n, CellSource{});
+  if (params_.keep_cell_sources) t.sources.assign(n * n, -1);
   const int slot = static_cast<int>(tiles_.size());
   tiles_.push_back(std::move(t));
   index_.emplace(key(ti, tj), slot);
@@ -115,7 +115,7 @@ bool DemMap::fuse(int i, int j, const CellMeasurement& m, std::int64_t seq, std:
   const int n = params_.tile_cells;
   const auto k = static_cast<std::size_t>((j - tj * n) * n + (i - ti * n));
   fuseCell(t->cells[k], m, params_.reject_variance_factor);
-  recordSource(*t, k, seq, m);
+  recordSource(*t, k, seq);
   touch(*t, seq, t_ns);
   return true;
 }
@@ -145,13 +145,6 @@ void DemMap::fuseCell(DemCell& c, const CellMeasurement& m, double reject_varian
   c.count = static_cast<std::uint16_t>(std::min<double>(n_new, kMaxCount));
 }
 
-void DemMap::recordSource(DemTile& t, std::size_t k, std::int64_t seq, const CellMeasurement& m) {
-  if (t.sources.empty() || m.count == 0) return;
-  CellSource& src = t.sources[k];
-  const auto w = static_cast<float>(m.sum_w);
-  if (src.seq < 0 || w >= src.sum_w) src = {static_cast<std::int32_t>(seq), w};
-}
-
 void DemMap::touch(DemTile& t, std::int64_t seq, std::int64_t t_ns) {
   if (t.first_seq < 0) t.first_seq = seq;
   t.last_seq = seq;
@@ -161,7 +154,7 @@ void DemMap::touch(DemTile& t, std::int64_t seq, std::int64_t t_ns) {
 std::size_t DemMap::bytes() const {
   const auto n = static_cast<std::size_t>(params_.tile_cells);
   const std::size_t per_cell =
-      sizeof(DemCell) + (params_.keep_cell_sources ? sizeof(CellSource) : 0);
+      sizeof(DemCell) + (params_.keep_cell_sources ? sizeof(std::int32_t) : 0);
   return tiles_.size() * n * n * per_cell;
 }
 

@@ -14,8 +14,8 @@
 //
 // Moving the map when past poses are corrected (loop closing): every tile records the range of
 // fusion sequence numbers (frames) that wrote into it, and with DemParams::keep_cell_sources
-// every cell the fusion whose measurement weighed most in it (CellSource), so each cell can be
-// re-placed by the correction of the pose it was mostly measured from (dem_replacer.hpp).
+// every cell the latest fusion that wrote into it, so each cell can be re-placed by the
+// correction of the pose of the last pass over it (dem_replacer.hpp).
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
@@ -55,18 +55,12 @@ struct CellMeasurement {
   std::uint32_t gated = 0;
 };
 
-// The fusion (DemFuser sequence number) whose measurement of a cell had the largest weight sum
-// (sum_w, 1/m^2; ties: the later one). seq -1: none yet.
-struct CellSource {
-  std::int32_t seq = -1;
-  float sum_w = 0.0f;
-};
-static_assert(sizeof(CellSource) == 8, "a cell source is 8 bytes");
-
 struct DemTile {
   int ti = 0, tj = 0;           // tile index: cells [ti n, (ti + 1) n) x [tj n, (tj + 1) n)
   std::vector<DemCell> cells;   // n x n, row-major, row 0 = smallest y
-  std::vector<CellSource> sources;  // n x n as cells with keep_cell_sources, else empty
+  // With keep_cell_sources, n x n as cells: the latest fusion (DemFuser sequence number) that
+  // wrote into each cell, -1 for none; else empty.
+  std::vector<std::int32_t> sources;
   std::int64_t first_seq = -1;  // fusion sequence numbers that wrote here
   std::int64_t last_seq = -1;
   std::int64_t last_t_ns = 0;  // time of the last frame that wrote here
@@ -97,9 +91,11 @@ class DemMap {
   // the measurement's points were gated (2 gated > count), the cell's independent variance is
   // first multiplied by reject_variance_factor (DemParams).
   static void fuseCell(DemCell& c, const CellMeasurement& m, double reject_variance_factor);
-  // Records fusion `seq`'s measurement of cell k (index into t.cells) in t.sources, when the
-  // tile keeps sources and that measurement outweighs the cell's source so far.
-  static void recordSource(DemTile& t, std::size_t k, std::int64_t seq, const CellMeasurement& m);
+  // Records that fusion `seq` wrote into cell k (index into t.cells), when the tile keeps
+  // sources.
+  static void recordSource(DemTile& t, std::size_t k, std::int64_t seq) {
+    if (!t.sources.empty()) t.sources[k] = static_cast<std::int32_t>(seq);
+  }
   // Records that fusion number `seq` (frame time t_ns) wrote into `t`.
   static void touch(DemTile& t, std::int64_t seq, std::int64_t t_ns);
   // Tile of cell index i (floor division).

@@ -34,8 +34,8 @@ struct DemParams {
   // relief (window smoothing, the cell's own slope), m, >= 0.
   double min_sigma_m = 0.01;
   int max_tiles = 4096;  // bound on the tiles in memory (64 x 64 cells x 12 B = 48 KiB each)
-  // Keep, per cell, which fusion wrote most into it (DemMap's CellSource, 8 B more a cell), so
-  // the map can be re-placed when past poses are corrected (dem_replacer.hpp). Not a config
+  // Keep, per cell, the latest fusion that wrote into it (DemTile::sources, 4 B more a cell),
+  // so the map can be re-placed when past poses are corrected (dem_replacer.hpp). Not a config
   // key: `svslam run` sets it when loop closing is on.
   bool keep_cell_sources = false;
 

@@ -72,7 +72,7 @@ Status DemReplacer::process(const DemMap& in, const std::vector<Eigen::Isometry3
         ++stats.cells_in;
         const int i = t.ti * n + c, j = t.tj * n + r;
         const Eigen::Vector3d p_map((i + 0.5) * cell, (j + 0.5) * cell, cl.height_m);
-        const std::int32_t s = t.sources.empty() ? -1 : t.sources[k].seq;
+        const std::int32_t s = t.sources.empty() ? -1 : t.sources[k];
         Eigen::Vector3d q = p_map;
         if (s >= 0 && static_cast<std::size_t>(s) < C_map.size())
           q = C_map[static_cast<std::size_t>(s)] * p_map;

@@ -2,8 +2,8 @@
 // Re-placing the elevation map when past poses are corrected (loop closing; seed 001 sec 5.2's
 // map, issue "loop closing": the DEM follows the corrected trajectory).
 //
-// Input: a map fused with DemParams::keep_cell_sources (each cell knows the fusion s whose
-// measurement weighed most in it) and, per fusion s, the world-frame correction C_s that moves a
+// Input: a map fused with DemParams::keep_cell_sources (each cell knows the latest fusion s that
+// wrote into it) and, per fusion s, the world-frame correction C_s that moves a
 // pose estimated then into the corrected frame (T_corrected = C_s T_online; world = first left
 // camera, map_frame.hpp). Each cell with data is a point at its centre and height,
 //     p_map = ((i + 1/2) cell_m, (j + 1/2) cell_m, h),
@@ -22,11 +22,12 @@
 // number of cells in x and y reproduces each moved cell exactly (height + dz); the identity
 // reproduces the map. The pose part of the sigma is kept as it was (the corrected poses are no
 // less certain than the online ones; conservative). A cell mixes what every pass over it
-// measured; it moves with its heaviest source only, so a cell seen on two passes with different
-// drift keeps part of the difference.
+// measured; it moves with the last pass only, so a cell seen on two passes with different drift
+// keeps part of the difference. The last pass: neighbouring cells then share one stretch of
+// trajectory and move together (CHANGELOG.md: the heaviest single frame instead).
 //
-// Memory: while it runs, 32 B of accumulator per cell of every output tile touched (1.6 times
-// the map's 20 B a cell with sources), freed at the end.
+// Memory: while it runs, 32 B of accumulator per cell of every output tile touched (twice the
+// map's 16 B a cell with sources), freed at the end.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>

@@ -38,17 +38,17 @@ Eigen::Isometry3d translation(double x, double y, double z) {
   return T;
 }
 
-TEST(DemReplacer, CellsRememberTheirHeaviestFusion) {
+TEST(DemReplacer, CellsRememberTheirLatestFusion) {
   DemMap map(sourcedParams());
   ASSERT_TRUE(map.fuse(1, 1, point(1.0, 0.2, 10), 4, 0));
-  ASSERT_TRUE(map.fuse(1, 1, point(1.1, 0.1, 10), 7, 0));  // heavier: the source
-  ASSERT_TRUE(map.fuse(1, 1, point(1.2, 0.3, 10), 9, 0));
+  ASSERT_TRUE(map.fuse(1, 1, point(1.1, 0.1, 10), 7, 0));
+  ASSERT_TRUE(map.fuse(1, 1, point(1.2, 0.3, 10), 9, 0));  // the latest: the source
   const DemTile* t = map.tile(0, 0);
   ASSERT_NE(t, nullptr);
   ASSERT_EQ(t->sources.size(), 64u);
-  EXPECT_EQ(t->sources[1 * 8 + 1].seq, 7);
-  EXPECT_EQ(t->sources[0].seq, -1);
-  EXPECT_EQ(map.bytes(), 64u * (12u + 8u));
+  EXPECT_EQ(t->sources[1 * 8 + 1], 9);
+  EXPECT_EQ(t->sources[0], -1);
+  EXPECT_EQ(map.bytes(), 64u * (12u + 4u));
   DemParams plain = sourcedParams();
   plain.keep_cell_sources = false;
   DemMap no_sources(plain);
