@@ -116,15 +116,18 @@ void MapStage::applySave(std::int64_t t_ns) {
   (void)lcm_->publishCommandStatus(cs);
 }
 
+const drivers::GeoOrigin* MapStage::geoOrigin(drivers::GeoOrigin& storage) const {
+  if (!cfg_.map_geo_origin) return nullptr;
+  const auto& o = *cfg_.map_geo_origin;
+  storage = {o[0], o[1], o[2]};
+  return &storage;
+}
+
 Status MapStage::writeFiles(const std::string& dir) {
   map::DemRaster r;
   map_->toRaster(r);
   drivers::GeoOrigin geo;
-  const drivers::GeoOrigin* g = nullptr;
-  if (cfg_.map_geo_origin) {
-    geo = {(*cfg_.map_geo_origin)[0], (*cfg_.map_geo_origin)[1], (*cfg_.map_geo_origin)[2]};
-    g = &geo;
-  }
+  const drivers::GeoOrigin* g = geoOrigin(geo);
   if (Status s = drivers::writeDemGeoTiff(dir + "/" + run::files::kDem, r, g); !s) return s;
   if (Status s = drivers::writeOrthoTiff(dir + "/" + run::files::kOrthoTiff, r, g); !s) return s;
   if (Status s = drivers::writeOrthoPng(dir + "/" + run::files::kOrthoPng, r); !s) return s;
@@ -164,11 +167,7 @@ Status MapStage::writeReplaced(
   map::DemRaster r;
   out.toRaster(r);
   drivers::GeoOrigin geo;
-  const drivers::GeoOrigin* g = nullptr;
-  if (cfg_.map_geo_origin) {
-    geo = {(*cfg_.map_geo_origin)[0], (*cfg_.map_geo_origin)[1], (*cfg_.map_geo_origin)[2]};
-    g = &geo;
-  }
+  const drivers::GeoOrigin* g = geoOrigin(geo);
   const std::string dir = out_dir_ + "/";
   if (Status s = drivers::writeDemGeoTiff(dir + run::files::kDemOptimized, r, g); !s) return s;
   if (Status s = drivers::writeOrthoTiff(dir + run::files::kOrthoOptimizedTiff, r, g); !s)

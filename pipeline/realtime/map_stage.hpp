@@ -15,8 +15,8 @@
 // ortho_optimized.png beside the online map.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-#include <functional>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "core/status.hpp"
+#include "drivers/files/dem_files.hpp"
 #include "drivers/lcm/lcm_transport.hpp"
 #include "drivers/source/stereo_source.hpp"
 #include "map/dem_fuser.hpp"
@@ -61,6 +62,8 @@ class MapStage {
 
  private:
   Status writeFiles(const std::string& dir);
+  // map.geo_origin in `storage`, or null without one.
+  const drivers::GeoOrigin* geoOrigin(drivers::GeoOrigin& storage) const;
   void applySave(std::int64_t t_ns);
   void publishTiles(std::int64_t t_ns);
 
