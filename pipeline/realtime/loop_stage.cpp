@@ -109,6 +109,8 @@ struct LoopStage::Impl {
   Eigen::Isometry3d keyframeCorrection(std::size_t k) const {
     return closer->correctedKeyframes()[k] * closer->keyframes()[k].T_world_cam.inverse();
   }
+  // LoopStage::frameCorrection (header).
+  bool frameCorrection(std::int64_t frame, Eigen::Isometry3d& M) const;
   Status writeLandmarks(const std::vector<MapLandmark>& map) const;
 
   void backEnd();
@@ -344,21 +346,26 @@ void LoopStage::correctionApplied(std::int64_t frame, const Eigen::Isometry3d& m
   impl_->applied.push_back({frame, moved});
 }
 
-Status LoopStage::Impl::writeLandmarks(const std::vector<MapLandmark>& map) const {
+bool LoopStage::Impl::frameCorrection(std::int64_t frame, Eigen::Isometry3d& M) const {
+  if (!closer || !closer->solved() || closer->keyframes().empty()) return false;
   const std::vector<Keyframe>& kfs = closer->keyframes();
+  // The keyframe at or before `frame` (the first one for a frame before it).
+  const auto it = std::upper_bound(kfs.begin(), kfs.end(), frame,
+                                   [](std::int64_t f, const Keyframe& k) { return f < k.frame; });
+  const std::size_t k = it == kfs.begin() ? 0 : static_cast<std::size_t>(it - kfs.begin()) - 1;
+  M = keyframeCorrection(k) * appliedBetween(kfs[k].frame, frame).inverse();
+  return true;
+}
+
+Status LoopStage::Impl::writeLandmarks(const std::vector<MapLandmark>& map) const {
   std::vector<run::PlyLandmark> ply;
   ply.reserve(map.size());
   for (const MapLandmark& l : map) {
+    // The correction of the frame the landmark was last estimated in (the last frame for one
+    // still in the state).
     Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
-    if (closer->solved() && !kfs.empty()) {
-      // The keyframe at or before the frame the landmark was last estimated in (the last frame
-      // for one still in the state).
-      const std::int64_t s =
-          l.active ? std::numeric_limits<std::int64_t>::max() : l.last_seen_frame;
-      std::size_t k = 0;
-      while (k + 1 < kfs.size() && kfs[k + 1].frame <= s) ++k;
-      M = keyframeCorrection(k) * appliedBetween(kfs[k].frame, s).inverse();
-    }
+    (void)frameCorrection(l.active ? std::numeric_limits<std::int64_t>::max() : l.last_seen_frame,
+                          M);
     const Eigen::Matrix3d C = M.linear() * l.cov * M.linear().transpose();
     ply.push_back({l.id, M * l.p_world, C.diagonal().cwiseMax(0.0).cwiseSqrt(), l.active,
                    l.observations});
@@ -416,15 +423,7 @@ Status LoopStage::finish(const std::vector<MapLandmark>& map) {
 }
 
 bool LoopStage::frameCorrection(std::int64_t frame, Eigen::Isometry3d& M) const {
-  const Impl& m = *impl_;
-  if (!m.closer || !m.closer->solved() || m.closer->keyframes().empty()) return false;
-  const std::vector<Keyframe>& kfs = m.closer->keyframes();
-  // The keyframe at or before `frame` (the first one for a frame before it).
-  const auto it = std::upper_bound(kfs.begin(), kfs.end(), frame,
-                                   [](std::int64_t f, const Keyframe& k) { return f < k.frame; });
-  const std::size_t k = it == kfs.begin() ? 0 : static_cast<std::size_t>(it - kfs.begin()) - 1;
-  M = m.keyframeCorrection(k) * m.appliedBetween(kfs[k].frame, frame).inverse();
-  return true;
+  return impl_->frameCorrection(frame, M);
 }
 
 std::string LoopStage::json() const {

@@ -5,19 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <string>
 #include <utility>
 
+#include "slam/ekf_checks.hpp"
+
 namespace svslam::map {
-namespace {
-
-bool isFiniteRigid(const Eigen::Isometry3d& C) {
-  if (!C.matrix().allFinite()) return false;
-  const Eigen::Matrix3d R = C.linear();
-  return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 &&
-         R.determinant() > 0.0;
-}
-
-}  // namespace
 
 Status DemReplacerParams::validate() const {
   if (!(min_coverage >= 0.01 && min_coverage <= 1.0))
@@ -47,9 +40,10 @@ Status DemReplacer::process(const DemMap& in, const std::vector<Eigen::Isometry3
   if (out.params().cell_m != p.cell_m || out.tileCells() != p.tile_cells)
     return Status::invalidArgument("map replacer: the two maps have different grids");
   for (std::size_t s = 0; s < C_world_by_seq.size(); ++s)
-    if (!isFiniteRigid(C_world_by_seq[s]))
-      return Status::invalidArgument("map replacer: correction of fusion " + std::to_string(s) +
-                                     " is not a finite rigid transform");
+    if (Status r = ekf_checks::checkRigid(
+            C_world_by_seq[s], "map replacer: correction of fusion " + std::to_string(s));
+        !r)
+      return r;
 
   // The corrections in the map frame: C_map = R C_world R^T (a rotation and a translation).
   std::vector<Eigen::Isometry3d> C_map(C_world_by_seq.size());
