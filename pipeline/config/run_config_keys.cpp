@@ -176,6 +176,28 @@ ConfigSection motion() {
   return s;
 }
 
+ConfigSection disparityOffset() {
+  ConfigSection s{"disparity_offset",
+                  "online estimate of the stereo pair's disparity offset "
+                  "(src/motion/disparity_offset.hpp)",
+                  {}};
+  s.keys = {
+      flag("enabled", SVSLAM_FIELD(odometry.disparity_offset.enabled),
+           "estimate the offset from the frame-to-frame motion and triangulate with it"),
+      number("prior_sigma_px", SVSLAM_FIELD(odometry.disparity_offset.prior_sigma_px), 1e-6, 100,
+             "px", "zero-mean prior on the offset"),
+      number("max_abs_px", SVSLAM_FIELD(odometry.disparity_offset.max_abs_px), 1e-6, 100, "px",
+             "the offset is clamped to +- this"),
+      number("gate_sigma", SVSLAM_FIELD(odometry.disparity_offset.gate_sigma), 0.1, 1000, "",
+             "a frame's estimate further than this many sigma is not used"),
+      number("min_points", SVSLAM_FIELD(odometry.disparity_offset.min_points), 3, 100000, "",
+             "motion inliers a frame needs to contribute"),
+      number("min_information", SVSLAM_FIELD(odometry.disparity_offset.min_information), 0, 1e12,
+             "px^-2", "a frame contributes when it alone fixes the offset to 1/sqrt(this) px"),
+  };
+  return s;
+}
+
 ConfigSection denseStereo() {
   ConfigSection s{"dense_stereo", "dense census stereo (src/stereo/dense_stereo.hpp)", {}};
   s.keys = {
@@ -261,7 +283,7 @@ ConfigSection odometry() {
 }  // namespace
 
 std::vector<ConfigSection> runConfigSections() {
-  return {topLevel(),    detector(), orb(),      stereoMatch(),       temporalMatch(),   motion(),
+  return {topLevel(),    detector(), orb(),      stereoMatch(),       temporalMatch(),   motion(), disparityOffset(),
           denseStereo(), clusters(), odometry(), slamConfigSection(), mapConfigSection(),
           loopConfigSection()};
 }

@@ -32,11 +32,13 @@ void RunSummary::add(int frame, const SlamFrameResult& sr) {
     if (r.inliers > 0) {  // a motion was estimated (not the first frame)
       sum_motion_m2 += r.motion_rms_mahalanobis * r.motion_rms_mahalanobis;
       ++motion_frames;
+      if (r.disparity_offset_frame.used) ++disparity_offset_frames;
     }
   } else {
     ++failure_counts[r.failure];
     if (failures.size() < 100) failures.emplace_back(frame, r.failure);
   }
+  disparity_offset_px = r.disparity_offset_px;
   sum_corners += r.corners;
   sum_points += r.stereo_points;
   sum_matches += r.temporal_matches;
@@ -93,6 +95,10 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
            s.motion_frames > 0 ? s.sum_motion_m2 / (3.0 * static_cast<double>(s.motion_frames))
                                : 0.0,
            3)
+      // Online disparity offset (src/motion/disparity_offset.hpp): the estimate after the last
+      // frame and the frames it was estimated from
+      .add("disparity_offset_px", s.disparity_offset_px, 4)
+      .add("disparity_offset_frames", s.disparity_offset_frames)
       .add("threads", cfg.threads)
       .add("dense_stereo", cfg.odometry.dense)
       .add("seed", static_cast<std::int64_t>(cfg.seed))

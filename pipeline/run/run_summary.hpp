@@ -26,6 +26,8 @@ struct RunSummary {
   double sum_observed = 0, sum_reperceived = 0, sum_gated = 0, sum_in_state = 0;
   double sum_motion_m2 = 0;    // squared motion_rms_mahalanobis of the estimated motions
   int motion_frames = 0;      // frames with an estimated motion
+  double disparity_offset_px = 0;  // the odometry's estimate after the last frame
+  int disparity_offset_frames = 0;  // frames that contributed to it
   int repredicted = 0;        // frames whose temporal search was re-predicted
   int retried = 0;            // frames whose temporal search was retried around the identity
   double sum_nis = 0;         // d^2 of the accepted landmark observations

@@ -52,6 +52,10 @@ struct StereoCalibration {
   double baseline_m = 0.0;
   int width = 0;
   int height = 0;
+  // Added to every measured disparity before triangulation (stereo/reprojection.hpp), px: the
+  // estimator's online estimate of the pair's disparity offset (motion/disparity_offset.hpp);
+  // 0 for a calibration as loaded.
+  double disparity_offset_px = 0.0;
 
   PinholeCamera leftCamera() const { return {f_px, f_px, cx_px, cy_px, width, height}; }
   // Depth of a disparity (pixels, > 0): z = f b / d.
@@ -60,7 +64,7 @@ struct StereoCalibration {
 
   Status validate() const {
     if (!std::isfinite(f_px) || !std::isfinite(cx_px) || !std::isfinite(cy_px) ||
-        !std::isfinite(baseline_m))
+        !std::isfinite(baseline_m) || !std::isfinite(disparity_offset_px))
       return Status::invalidArgument("stereo calibration contains NaN or infinity");
     if (f_px <= 0.0) return Status::invalidArgument("stereo calibration: f_px must be > 0");
     if (baseline_m <= 0.0)

@@ -12,6 +12,7 @@ Status StereoOdometryParams::validate() const {
   if (Status s = stereo_match.validate(); !s) return s;
   if (Status s = temporal_match.validate(); !s) return s;
   if (Status s = motion.validate(); !s) return s;
+  if (Status s = disparity_offset.validate(); !s) return s;
   if (roi_tracking) {
     if (Status st = clusters.validate(); !st) return st;
     if (!(unknown_threshold_factor > 0.0 && unknown_threshold_factor <= 1.0))

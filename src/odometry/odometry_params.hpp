@@ -7,6 +7,7 @@
 #include "features/orb_extractor.hpp"
 #include "features/stereo_point_matcher.hpp"
 #include "features/temporal_matcher.hpp"
+#include "motion/disparity_offset.hpp"
 #include "motion/rotation_alignment.hpp"
 #include "motion/visual_motion.hpp"
 #include "stereo/dense_stereo.hpp"
@@ -23,6 +24,9 @@ struct StereoOdometryParams {
   StereoMatchParams stereo_match;
   TemporalMatchParams temporal_match;
   VisualMotionParams motion;
+  // Online estimate of the pair's disparity offset (motion/disparity_offset.hpp): every 3D point
+  // of the motion estimate and of the filter is triangulated with it.
+  DisparityOffsetParams disparity_offset;
   // Clustered-feature ROI tracking (seed 004 sec 3.6): the previous frame's 3D points are
   // clustered; the clusters, moved by the predicted motion, give left ROIs (where points are
   // kept and temporally matched to their cluster's members only) and right ROIs (which bound the

@@ -31,10 +31,12 @@ StereoOdometry::StereoOdometry(const StereoOdometryParams& params, const StereoC
       temporal_matcher_(params.temporal_match),
       motion_(params.motion),
       bootstrap_motion_(bootstrapParams(params.motion)),
+      disparity_offset_(params.disparity_offset, calib.f_px * calib.baseline_m),
       rotation_alignment_(alignmentParams(params.rotation_alignment, calib.width, calib.height),
                           std::max(calib.width, 16), std::max(calib.height, 16)) {
   init_status_ = params.validate();
   if (init_status_) init_status_ = calib.validate();
+  if (init_status_) init_status_ = disparity_offset_.initStatus();
   if (init_status_) {
     prev_left_.resize(calib.width, calib.height);
     cur_left_.resize(calib.width, calib.height);
@@ -159,7 +161,11 @@ void StereoOdometry::fillPairs(const std::vector<TemporalMatch>& matches,
     if (exclude && (*exclude)[k]) continue;
     const TrackPoint& p = prev_[static_cast<std::size_t>(matches[k].prev)];
     const TrackPoint& c = cur_[static_cast<std::size_t>(matches[k].cur)];
-    pairs_.push_back({p.p_cam, p.cov, c.p_cam, c.cov});
+    // Both points moved to the current disparity offset (the stage triangulated them without).
+    const double fb = calib_.f_px * calib_.baseline_m, delta = calib_.disparity_offset_px;
+    const double sp = disparityOffsetScale(p.p_cam.z(), fb, delta);
+    const double sc = disparityOffsetScale(c.p_cam.z(), fb, delta);
+    pairs_.push_back({sp * p.p_cam, sp * sp * p.cov, sc * c.p_cam, sc * sc * c.cov});
   }
 }
 
@@ -241,6 +247,11 @@ Status StereoOdometry::estimateMotion(const std::vector<std::uint8_t>* exclude,
       out.covariance = vm.covariance;
       out.inliers = vm.used;
       out.motion_rms_mahalanobis = vm.rms_mahalanobis;
+      if (Status ds = disparity_offset_.process(pairs_, vm.inlier, vm.T_cur_prev,
+                                                out.disparity_offset_frame);
+          !ds)
+        return ds;
+      calib_.disparity_offset_px = disparity_offset_.offsetPx();
     }
     last_motion_ = T_cur_prev;
     T_first_cam_ = T_first_cam_ * T_cur_prev.inverse();
@@ -252,6 +263,7 @@ Status StereoOdometry::estimateMotion(const std::vector<std::uint8_t>* exclude,
   }
   if (observer) observer->stageDone("motion");
   out.T_first_cam = T_first_cam_;
+  out.disparity_offset_px = calib_.disparity_offset_px;
   completed_ = true;  // becomes the previous frame at the next frontEnd()
   return Status::ok();
 }

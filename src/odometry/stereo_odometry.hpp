@@ -19,7 +19,10 @@
 //     the normal radius, kept when its own RANSAC motion has at least as many inliers. Only
 //     then, still below min_matches, the retry. The motion of a re-predicted or retried frame
 //     is estimated with seeded RANSAC (ransac_on_repredict);
-//  2. visual motion estimation (motion/visual_motion.hpp) -> T_cur_prev and its covariance.
+//  2. visual motion estimation (motion/visual_motion.hpp) -> T_cur_prev and its covariance,
+//     on the point pairs moved to the current disparity offset (both frames' points scaled by
+//     disparityOffsetScale); then the offset estimate is updated with the frame
+//     (motion/disparity_offset.hpp) and calibration() carries it for the next observations.
 // Poses: T_first_cam = T_first_prev * T_cur_prev^-1 (left camera in the first left camera's
 // frame, x right, y down, z forward). A frame whose motion cannot be estimated keeps the
 // predicted motion and is reported as not tracked; the next frame continues from it.
@@ -58,6 +61,9 @@ struct OdometryFrameResult {
   // RMS over the inliers of the motion's residual Mahalanobis distance (VisualMotionResult):
   // about sqrt(3) when the point covariances match the data, larger when they are too small.
   double motion_rms_mahalanobis = 0;
+  // The disparity offset after this frame (px) and this frame's own estimate of it.
+  double disparity_offset_px = 0;
+  DisparityOffsetFrame disparity_offset_frame;
   bool retried = false;
   bool repredicted = false;  // the matches are those of the guided second pass
   int rois = 0;             // ROI tracking: cluster regions used in this frame
@@ -127,6 +133,7 @@ class StereoOdometry {
   VisualMotionResult motion_result_;  // reused every frame (its inlier flags keep capacity)
   VisualMotion bootstrap_motion_;     // RANSAC motion of the guided re-matching
   VisualMotionResult bootstrap_result_;
+  DisparityOffsetEstimator disparity_offset_;
   std::vector<TemporalMatch> rematches_;
   TemporalMatchStats rematch_stats_;
   std::vector<double> errors_;  // scratch of medianPredictionError

@@ -121,6 +121,8 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
   passTracks();
   out.vme_matches = static_cast<int>(std::count(exclude_.begin(), exclude_.end(), 0));
   if (Status s = vo_.estimateMotion(&exclude_, out.odometry, observer); !s) return s;
+  // New landmarks and anchors are triangulated with the odometry's disparity offset.
+  calib_.disparity_offset_px = vo_.calibration().disparity_offset_px;
   const OdometryFrameResult& od = out.odometry;
 
   landmark_uv_.clear();

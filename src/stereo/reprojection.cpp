@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace svslam {
 
@@ -21,7 +22,14 @@ StereoPoint reprojectPixel(const StereoCalibration& calib, double u_px, double v
   const double f = calib.f_px;
   const double du = u_px - calib.cx_px;
   const double dv = v_px - calib.cy_px;
+  const double d_measured_px = d_px;
+  d_px += calib.disparity_offset_px;
   StereoPoint p;
+  if (d_measured_px > 0.0 && !(d_px > 0.0)) {  // the offset took it to zero or below: no point
+    p.p_cam.setConstant(std::numeric_limits<double>::quiet_NaN());
+    p.cov.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return p;
+  }
   p.p_cam = Eigen::Vector3d(du * b / d_px, dv * b / d_px, f * b / d_px);
   Eigen::Matrix3d J;
   const double d2 = d_px * d_px;

@@ -36,7 +36,10 @@ struct ReprojectionParams {
   Status validate() const;
 };
 
-// One point with covariance from (u, v, d, sigma_d). Precondition: d > 0, calibration valid.
+// One point with covariance from (u, v, d, sigma_d), d the measured disparity: the point is
+// triangulated at d + calib.disparity_offset_px (also what the result's d_px holds). A
+// non-finite point when the offset takes a positive d to zero or below. Precondition: d > 0,
+// calibration valid.
 StereoPoint reprojectPixel(const StereoCalibration& calib, double u_px, double v_px, double d_px,
                            double sigma_d_px, double sigma_uv_px);
 
