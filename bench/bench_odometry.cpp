@@ -53,8 +53,9 @@ const Sequence& sequence() {
 }
 
 // The front end with the library defaults; `repredict` false leaves out the re-prediction of a
-// poor temporal search (docs/odometry.md), for the same-run cost of it.
-void frontEnd(benchmark::State& st, bool repredict) {
+// poor temporal search (docs/odometry.md), `disparity_offset` false the online disparity offset,
+// for the same-run cost of each.
+void frontEnd(benchmark::State& st, bool repredict, bool disparity_offset = true) {
   const Sequence& seq = sequence();
   if (seq.frames.empty()) {
     st.SkipWithError(("no KITTI data: " + seq.error).c_str());
@@ -63,6 +64,7 @@ void frontEnd(benchmark::State& st, bool repredict) {
   svslam::StereoOdometryParams params;
   params.repredict = repredict;
   params.ransac_on_repredict = repredict;
+  params.disparity_offset.enabled = disparity_offset;
   svslam::StereoStage stage(params, seq.calib);
   svslam::StereoStageOutput stereo;
   svslam::StereoOdometry vo(params, seq.calib);
@@ -85,6 +87,7 @@ void frontEnd(benchmark::State& st, bool repredict) {
 
 void BM_FrontEnd_svslam(benchmark::State& st) { frontEnd(st, true); }
 void BM_FrontEnd_svslam_no_repredict(benchmark::State& st) { frontEnd(st, false); }
+void BM_FrontEnd_svslam_no_disparity_offset(benchmark::State& st) { frontEnd(st, true, false); }
 
 // One rotation alignment of the re-prediction (KITTI frames 0 and 2, the constant-velocity and
 // the identity starts), the cost a re-predicted frame adds before its wide pass.
@@ -174,6 +177,7 @@ void BM_FrontEnd_opencv_orb(benchmark::State& st) {
 
 BENCHMARK(BM_FrontEnd_svslam)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_FrontEnd_svslam_no_repredict)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_FrontEnd_svslam_no_disparity_offset)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_FrontEnd_opencv_orb)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 // Prints per-frame times and the ratio svslam / OpenCV at the end.
