@@ -40,29 +40,39 @@ struct SimResult {
   int frames_used;
 };
 
-// `frames` frame pairs of 150 points each (depth 5-40 m) seen before and after `T_cur_prev`;
-// each pair triangulated with the current estimate, the motion estimated, the offset updated.
-SimResult simulate(double true_offset_px, const Eigen::Isometry3d& T_cur_prev, int frames,
-             std::uint32_t seed) {
-  std::mt19937 rng(seed);
+// One frame pair: 150 points (depth 5-40 m, in front of both cameras) seen before and after
+// T_cur_prev with disparities `true_offset_px` short, triangulated with calibration `c` (the
+// current estimate of the offset).
+std::vector<PointPair> framePairs(const Eigen::Isometry3d& T_cur_prev, double true_offset_px,
+                                  const StereoCalibration& c, std::mt19937& rng) {
   std::uniform_real_distribution<double> x(-15, 15), y(-2, 3), z(5, 40);
+  std::vector<PointPair> pairs;
+  while (pairs.size() < 150) {
+    const Eigen::Vector3d X(x(rng), y(rng), z(rng));
+    const Eigen::Vector3d Xc = T_cur_prev * X;
+    if (Xc.z() < 3.0) continue;
+    const Pixel a = measure(X, true_offset_px, rng), b = measure(Xc, true_offset_px, rng);
+    if (a.d <= 0.5 || b.d <= 0.5) continue;
+    const StereoPoint pa = reprojectPixel(c, a.u, a.v, a.d, 0.2, 0.3);
+    const StereoPoint pb = reprojectPixel(c, b.u, b.v, b.d, 0.2, 0.3);
+    pairs.push_back({pa.p_cam, pa.cov, pb.p_cam, pb.cov});
+  }
+  return pairs;
+}
+
+// `frames` frame pairs (framePairs), each triangulated with the current estimate, the motion
+// estimated, the offset updated.
+SimResult simulate(double true_offset_px, const Eigen::Isometry3d& T_cur_prev, int frames,
+                   std::uint32_t seed) {
+  std::mt19937 rng(seed);
   DisparityOffsetParams params;
   const StereoCalibration c0 = calib();
   DisparityOffsetEstimator est(params, c0.f_px * c0.baseline_m);
   EXPECT_TRUE(est.initStatus());
   VisualMotion vme(VisualMotionParams{});
   for (int f = 0; f < frames; ++f) {
-    const StereoCalibration c = calib(est.offsetPx());
-    std::vector<PointPair> pairs;
-    while (pairs.size() < 150) {
-      const Eigen::Vector3d X(x(rng), y(rng), z(rng));
-      const Eigen::Vector3d Xc = T_cur_prev * X;
-      if (Xc.z() < 3.0) continue;
-      const Pixel a = measure(X, true_offset_px, rng), b = measure(Xc, true_offset_px, rng);
-      const StereoPoint pa = reprojectPixel(c, a.u, a.v, a.d, 0.2, 0.3);
-      const StereoPoint pb = reprojectPixel(c, b.u, b.v, b.d, 0.2, 0.3);
-      pairs.push_back({pa.p_cam, pa.cov, pb.p_cam, pb.cov});
-    }
+    const std::vector<PointPair> pairs =
+        framePairs(T_cur_prev, true_offset_px, calib(est.offsetPx()), rng);
     VisualMotionResult vm;
     EXPECT_TRUE(vme.process(pairs, vm));
     DisparityOffsetFrame out;
@@ -120,7 +130,6 @@ TEST(DisparityOffset, CorrectionScaleIsTriangulationAtTheShiftedDisparity) {
 
 TEST(DisparityOffset, FrameFarFromTheEstimateIsGated) {
   std::mt19937 rng(5);
-  std::uniform_real_distribution<double> x(-15, 15), y(-2, 3), z(5, 40);
   const StereoCalibration c0 = calib();
   DisparityOffsetEstimator est(DisparityOffsetParams{}, c0.f_px * c0.baseline_m);
   VisualMotion vme(VisualMotionParams{});
@@ -128,17 +137,7 @@ TEST(DisparityOffset, FrameFarFromTheEstimateIsGated) {
   // 20 frames without offset, then one whose disparities are all 3 px short.
   for (int f = 0; f < 21; ++f) {
     const double offset = f < 20 ? 0.0 : 3.0;
-    const StereoCalibration c = calib(est.offsetPx());
-    std::vector<PointPair> pairs;
-    while (pairs.size() < 150) {
-      const Eigen::Vector3d X(x(rng), y(rng), z(rng));
-      const Eigen::Vector3d Xc = T * X;
-      const Pixel a = measure(X, offset, rng), b = measure(Xc, offset, rng);
-      if (a.d <= 0.5 || b.d <= 0.5) continue;
-      const StereoPoint pa = reprojectPixel(c, a.u, a.v, a.d, 0.2, 0.3);
-      const StereoPoint pb = reprojectPixel(c, b.u, b.v, b.d, 0.2, 0.3);
-      pairs.push_back({pa.p_cam, pa.cov, pb.p_cam, pb.cov});
-    }
+    const std::vector<PointPair> pairs = framePairs(T, offset, calib(est.offsetPx()), rng);
     VisualMotionResult vm;
     ASSERT_TRUE(vme.process(pairs, vm));
     DisparityOffsetFrame out;
