@@ -23,7 +23,7 @@
 // the motion is profiled out (Schur complement):
 //     I_k = c - h^T H^-1 h,   delta_k = delta + (h^T H^-1 g - e) / I_k,
 // an estimate of the offset with information I_k (px^-2). The offset is their
-// information-weighted mean with a zero-mean prior of sigma prior_sigma_px:
+// information-weighted mean with a zero-mean prior of sigma prior_sigma_px (0.5 px: the offset is sub-pixel, no more):
 //     delta = sum I_k delta_k / (prior_sigma_px^-2 + sum I_k),
 // clamped to [-max_abs_px, max_abs_px]. A frame whose delta_k lies more than gate_sigma
 // standard deviations (sqrt(1 / I_k + 1 / information)) from the current offset is not used
@@ -43,7 +43,7 @@ namespace svslam {
 
 struct DisparityOffsetParams {
   bool enabled = true;
-  double prior_sigma_px = 0.1;  // prior on the offset, zero mean, px, > 0
+  double prior_sigma_px = 0.5;  // prior on the offset, zero mean, px, > 0 (sub-pixel, weakly)
   double max_abs_px = 1.0;      // the offset is clamped to +- this, px, > 0
   double gate_sigma = 5.0;      // frame estimates further than this many sigma are not used, > 0
   int min_points = 30;          // inliers a frame needs to contribute, >= 3
