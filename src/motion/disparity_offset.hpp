@@ -23,7 +23,7 @@
 // the motion is profiled out (Schur complement):
 //     I_k = c - h^T H^-1 h,   delta_k = delta + (h^T H^-1 g - e) / I_k,
 // an estimate of the offset with information I_k (px^-2). The offset is their
-// information-weighted mean with a zero-mean prior of sigma prior_sigma_px (0.5 px: the offset is sub-pixel, no more):
+// information-weighted mean with a zero-mean prior of sigma prior_sigma_px (sub-pixel):
 //     delta = sum I_k delta_k / (prior_sigma_px^-2 + sum I_k),
 // clamped to [-max_abs_px, max_abs_px]. A frame whose delta_k lies more than gate_sigma
 // standard deviations (sqrt(1 / I_k + 1 / information)) from the current offset is not used
