@@ -32,6 +32,10 @@ Status EkfSlamParams::validate() const {
     return Status::invalidArgument("max_update_tasks must be in [1, 16]");
   if (!(gate_chi2 > 0) || !std::isfinite(gate_chi2))
     return Status::invalidArgument("gate_chi2 must be finite and > 0");
+  if (!(bearing_gate_chi2 > 0) || !std::isfinite(bearing_gate_chi2))
+    return Status::invalidArgument("bearing_gate_chi2 must be finite and > 0");
+  if (!(bearing_min_depth_m > 0) || !std::isfinite(bearing_min_depth_m))
+    return Status::invalidArgument("bearing_min_depth_m must be finite and > 0");
   return Status::ok();
 }
 
@@ -256,6 +260,14 @@ Status EkfSlam::applyBatch(const std::vector<LandmarkObservation>& obs, const in
     S.middleRows(3 * i, 3).noalias() += H_m * M.middleRows(6 + 3 * s, 3);
     S.block<3, 3>(3 * i, 3 * i) += o.R;
   }
+  return applyStacked(m, executor);
+}
+
+Status EkfSlam::applyStacked(int m, Executor* executor) {
+  const int n = stateDim();
+  auto M = B_.block(0, 0, n, m);
+  auto nu = nu_.head(m);
+  auto S = S_.topLeftCorner(m, m);
   symmetrise(S);
   auto L = L_.topLeftCorner(m, m);
   L = S;

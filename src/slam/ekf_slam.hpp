@@ -80,6 +80,9 @@ struct EkfSlamParams {
                                     // accepted observations are applied in successive batches
   double gate_chi2 = 11.34;         // Mahalanobis d^2 threshold, chi-square with 3 dof
                                     // (11.34: 99 %, 7.81: 95 %, 16.27: 99.9 %), > 0
+  double bearing_gate_chi2 = 9.21;  // the same for bearings, chi-square with 2 dof (99 %), > 0
+  double bearing_min_depth_m = 0.05;  // a bearing whose landmark is predicted nearer than this
+                                      // in front of the camera (or behind it) is not applied
   bool joseph_form = true;   // Joseph-form covariance update; false: optimal-gain form P - B B^T
   int max_update_tasks = 2;  // row pieces the update's products are split into on the executor
                              // given to update(), [1, 16]; each piece has its own preallocated
@@ -92,6 +95,17 @@ struct LandmarkObservation {
   int id = -1;            // landmark id returned by addLandmark
   Eigen::Vector3d z_cam;  // measured position in the current left camera frame, m
   Eigen::Matrix3d R;      // its covariance, m^2, symmetric positive definite
+};
+
+// Bearing of landmark id (seed 000 part 2, seed 003): its direction in the current left camera
+// frame as normalised image coordinates xy = (x / z, y / z) of z_cam = R_wc^T (m - t_wc), with
+// covariance R (dimensionless^2; a pixel error sigma_px with focal length f_px gives
+// (sigma_px / f_px)^2 I). The model: xy = pi(h(x)), pi(p) = (p_x / p_z, p_y / p_z), so
+// H = J_pi [H_pose H_m] with J_pi = [1/z 0 -x/z^2; 0 1/z -y/z^2] at the predicted point.
+struct BearingObservation {
+  int id = -1;
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d R = Eigen::Matrix2d::Identity();  // symmetric positive definite
 };
 
 struct ObservationResult {
@@ -117,6 +131,13 @@ class EkfSlam {
   // run as row pieces on `executor` when given (bit-identical results for any executor).
   Status update(const std::vector<LandmarkObservation>& obs,
                 std::vector<ObservationResult>& results, Executor* executor = nullptr);
+  // Gates and applies the bearing observations of one frame (BearingObservation), like
+  // update(): gating on bearing_gate_chi2 against the state before the call, stacked 2-row
+  // blocks in batches of max_batch_observations, the same gain and covariance forms. A bearing
+  // whose landmark is predicted behind the camera or nearer than bearing_min_depth_m is
+  // reported not accepted with d^2 = infinity.
+  Status updateBearings(const std::vector<BearingObservation>& obs,
+                        std::vector<ObservationResult>& results, Executor* executor = nullptr);
   // Adds the landmark measured at z_cam (current camera frame, m) with covariance R_z (m^2,
   // symmetric positive semi-definite); returns its id. failedPrecondition when the state is full.
   Result<int> addLandmark(const Eigen::Vector3d& z_cam, const Eigen::Matrix3d& R_z);
@@ -176,6 +197,15 @@ class EkfSlam {
   // One stacked update; its products run as row pieces on `executor` when not null.
   Status applyBatch(const std::vector<LandmarkObservation>& obs, const int* idx, int count,
                     Executor* executor);
+  Status applyBearingBatch(const std::vector<BearingObservation>& obs, const int* idx, int count,
+                           Executor* executor);
+  // The update from the stacked M = P H^T (B_, n x m), innovation nu_ (m) and S_ (m x m,
+  // H P H^T + R, not yet symmetrised): gain, state injection and covariance.
+  Status applyStacked(int m, Executor* executor);
+  // Bearing model at landmark slot s: predicted xy and its Jacobians (false when the landmark
+  // is predicted nearer than bearing_min_depth_m).
+  bool bearingModel(int s, Eigen::Vector2d& xy, Eigen::Matrix<double, 2, 6>& H_p,
+                    Eigen::Matrix<double, 2, 3>& H_m) const;
   void inject(int n);
   // C -= U V^T (only its lower triangle when lower_only), through the matrix kernels.
   void subtractProduct(Eigen::Ref<Eigen::MatrixXd> C, const Eigen::Ref<const Eigen::MatrixXd>& U,
