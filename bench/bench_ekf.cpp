@@ -6,7 +6,8 @@
 // joseph_2threads: the update's products split in row pieces on a two-thread pool
 // (bit-identical results). BM_Ekf_svslam_default: the SLAM's default configuration (140
 // landmarks, up to 60 observations a frame, batches of 16; EkfSlamParams{}) with 30, 60 and 100
-// observations. Also the n x n product alone per matrix backend beside Eigen's.
+// observations; BM_Ekf_svslam_default_bearings: the same with the observations as bearings
+// (2 rows each instead of 3). Also the n x n product alone per matrix backend beside Eigen's.
 // Prints ms per frame and the ratio svslam / dense at the end.
 #include <benchmark/benchmark.h>
 
@@ -80,8 +81,17 @@ void observe(const svslam::EkfSlam& ekf, int n_obs, int frame,
   }
 }
 
+// The same observations as bearings (normalised image coordinates, 0.5 px at f = 700 px).
+void toBearings(const std::vector<svslam::LandmarkObservation>& obs,
+                std::vector<svslam::BearingObservation>& bearings) {
+  bearings.clear();
+  const double s = 0.5 / 700.0;
+  for (const auto& o : obs)
+    bearings.push_back({o.id, o.z_cam.head<2>() / o.z_cam.z(), s * s * Eigen::Matrix2d::Identity()});
+}
+
 void runSvslam(benchmark::State& st, bool joseph, int threads = 1,
-               svslam::EkfSlamParams params = params300()) {
+               svslam::EkfSlamParams params = params300(), bool bearings = false) {
   const int n_obs = static_cast<int>(st.range(0));
   svslam::ThreadPoolExecutor pool(threads);
   params.joseph_form = joseph;
@@ -89,13 +99,17 @@ void runSvslam(benchmark::State& st, bool joseph, int threads = 1,
   (void)ekf.reset(Eigen::Isometry3d::Identity(), motionCov());
   for (const auto& p : scene(params.max_landmarks)) (void)ekf.addLandmark(p, stereoCov(p));
   std::vector<svslam::LandmarkObservation> obs;
+  std::vector<svslam::BearingObservation> bobs;
   std::vector<svslam::ObservationResult> res;
   int frame = 0, accepted = 0;
   for (auto _ : st) {
     st.PauseTiming();
     observe(ekf, n_obs, frame++, obs);
+    if (bearings) toBearings(obs, bobs);
     st.ResumeTiming();
-    if (!ekf.predict(motion(), motionCov()) || !ekf.update(obs, res, threads > 1 ? &pool : nullptr))
+    svslam::Executor* ex = threads > 1 ? &pool : nullptr;
+    if (!ekf.predict(motion(), motionCov()) ||
+        !(bearings ? ekf.updateBearings(bobs, res, ex) : ekf.update(obs, res, ex)))
       st.SkipWithError("EKF failed");
     for (const auto& r : res) accepted += r.accepted ? 1 : 0;
   }
@@ -109,6 +123,10 @@ void BM_Ekf_svslam_optimal_gain(benchmark::State& st) { runSvslam(st, false); }
 void BM_Ekf_svslam_joseph_2threads(benchmark::State& st) { runSvslam(st, true, 2); }
 void BM_Ekf_svslam_default(benchmark::State& st) {
   runSvslam(st, true, 1, svslam::EkfSlamParams{});
+}
+// The default filter observing the same landmarks by bearing (camera loss, --mode mono).
+void BM_Ekf_svslam_default_bearings(benchmark::State& st) {
+  runSvslam(st, true, 1, svslam::EkfSlamParams{}, true);
 }
 
 // Naive dense EKF on the same model: full n x n Jacobians and products everywhere.
@@ -227,6 +245,12 @@ BENCHMARK(BM_Ekf_svslam_optimal_gain)
     ->Unit(benchmark::kMillisecond)
     ->MinTime(1.0);
 BENCHMARK(BM_Ekf_svslam_default)
+    ->Arg(30)
+    ->Arg(60)
+    ->Arg(100)
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(1.0);
+BENCHMARK(BM_Ekf_svslam_default_bearings)
     ->Arg(30)
     ->Arg(60)
     ->Arg(100)
