@@ -206,7 +206,7 @@ Result<PoseReport> fromLcm(const svslam_lcm::pose_t& m) {
   r.T_world_cam.translation() = p;
   for (int k = 0; k < 36; ++k) r.cov(k / 6, k % 6) = m.covariance[k];
   if (Status s = checkCovariance(r.cov, what); !s) return s;
-  if (m.status < 0 || m.status > 2)
+  if (m.status < 0 || m.status > 3)
     return Status::invalidArgument(what + ": unknown status " + std::to_string(m.status));
   r.status = static_cast<TrackingStatus>(m.status);
   if (m.search < 0 || m.search > 2)

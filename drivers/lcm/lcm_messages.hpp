@@ -31,11 +31,12 @@
 
 namespace svslam::drivers {
 
-// Same values as svslam_lcm::pose_t::TRACKING / LOST / INITIALIZING.
+// Same values as svslam_lcm::pose_t::TRACKING / LOST / INITIALIZING / MONOCULAR.
 enum class TrackingStatus : int {
   kTracking = 0,      // pose measured from the current frame
   kLost = 1,          // motion predicted, not measured
   kInitializing = 2,  // no map yet
+  kMonocular = 3,     // right camera unusable: bearings of the map, left image only
 };
 
 enum class SearchKind : std::int8_t { kPredicted = 0, kRepredicted = 1, kRetried = 2 };

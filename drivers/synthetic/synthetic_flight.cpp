@@ -73,6 +73,10 @@ SyntheticFlightParams SyntheticFlightParams::forVariant(FlightVariant v) {
 Status SyntheticFlightParams::validate() const {
   if (frames < 1 || frames > 100000) return outOfRange("frames", "in 1..100000");
   if (loop_frames < 0 || loop_frames > 100000) return outOfRange("loop_frames", "in 0..100000");
+  if (right_black_from < -1 || right_black_from > 100000)
+    return outOfRange("right_black_from", "in -1..100000");
+  if (right_black_to < -1 || right_black_to > 100000)
+    return outOfRange("right_black_to", "in -1..100000");
   if (width < 32 || width > 8192) return outOfRange("width", "in 32..8192");
   if (height < 32 || height > 8192) return outOfRange("height", "in 32..8192");
   if (!inRange(baseline_m, 1e-6, 100.0)) return outOfRange("baseline_m", "in (0, 100]");

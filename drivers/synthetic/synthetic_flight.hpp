@@ -60,6 +60,10 @@ struct SyntheticFlightParams {
   FlightVariant variant = FlightVariant::kBlimp;
   int frames = 100;                // sequence length, 1..100000
   int loop_frames = 0;             // frames per loop (the flight repeats it), 0 = frames
+  // A failed right camera (camera-loss tests): the right images of frames [right_black_from,
+  // right_black_to) are black; right_black_from = -1: none; right_black_to = -1: to the end.
+  int right_black_from = -1;
+  int right_black_to = -1;
   int width = 1024;                // px, 32..8192
   int height = 768;                // px, 32..8192
   double baseline_m = 2.2;         // m, (0, 100]; rover 0.5

@@ -21,6 +21,10 @@ class SyntheticSource final : public StereoSource {
   Result<bool> next(StereoFrame& out) override {
     if (pos_ >= flight_.size()) return false;
     if (Status s = flight_.render(pos_, out.left, out.right); !s) return s;
+    const SyntheticFlightParams& p = flight_.params();
+    if (p.right_black_from >= 0 && pos_ >= p.right_black_from &&
+        (p.right_black_to < 0 || pos_ < p.right_black_to))
+      out.right.fill(0);
     out.index = pos_;
     out.t_ns = flight_.timeNs(pos_);
     ++pos_;
@@ -105,6 +109,8 @@ Result<SyntheticFlightParams> parseSyntheticOptions(const std::string& options) 
   SyntheticFlightParams p = SyntheticFlightParams::forVariant(variant);
   const std::map<std::string, int*> ints = {{"frames", &p.frames},
                                             {"loop_frames", &p.loop_frames},
+                                            {"right_black_from", &p.right_black_from},
+                                            {"right_black_to", &p.right_black_to},
                                             {"width", &p.width},
                                             {"height", &p.height},
                                             {"supersample", &p.supersample}};

@@ -37,6 +37,8 @@ const char* statusName(drivers::TrackingStatus s) {
       return "lost";
     case drivers::TrackingStatus::kInitializing:
       return "initializing";
+    case drivers::TrackingStatus::kMonocular:
+      return "monocular";
   }
   return "unknown";
 }

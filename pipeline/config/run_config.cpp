@@ -41,6 +41,7 @@ Status parse(ConfigReader& r, RunConfig& out) {
     for (const ConfigKey& k : s.keys) SVSLAM_TRY(k.read(r, fullName(s, k), out));
   SVSLAM_TRY(r.finish());
   out.odometry.motion.seed = out.seed;
+  out.slam.bearing_init.seed = out.seed;
   applyThreads(out, out.threads);
   return checkAcrossKeys(r.name(), out);
 }

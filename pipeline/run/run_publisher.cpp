@@ -68,16 +68,19 @@ Status RunPublisher::publish(const rt::FrameSlot& slot) {
   p.seq = slot.seq;
   p.T_world_cam = sr.T_world_cam;
   p.cov = sr.pose_cov;
-  p.status = sr.odometry.frame == 0 ? drivers::TrackingStatus::kInitializing
-             : sr.odometry.tracked  ? drivers::TrackingStatus::kTracking
-                                    : drivers::TrackingStatus::kLost;
+  p.status = sr.mono                  ? drivers::TrackingStatus::kMonocular
+             : sr.odometry.frame == 0 ? drivers::TrackingStatus::kInitializing
+             : sr.odometry.tracked    ? drivers::TrackingStatus::kTracking
+                                      : drivers::TrackingStatus::kLost;
   p.motion_inliers = sr.odometry.inliers;
   p.motion_residual_per_dof =
       sr.odometry.inliers > 0
           ? sr.odometry.motion_rms_mahalanobis * sr.odometry.motion_rms_mahalanobis / 3.0
           : 0.0;
-  p.observation_nis_per_dof = sr.nis_count > 0 ? sr.nis_sum / (3.0 * sr.nis_count) : 0.0;
-  p.landmarks_observed = sr.nis_count;
+  // Stereo observations have 3 dof, bearings 2.
+  const int obs_dof = 3 * sr.nis_count + 2 * sr.bearing_count;
+  p.observation_nis_per_dof = obs_dof > 0 ? (sr.nis_sum + sr.bearing_nis_sum) / obs_dof : 0.0;
+  p.landmarks_observed = sr.nis_count + sr.bearing_count;
   p.search = sr.odometry.retried       ? drivers::SearchKind::kRetried
              : sr.odometry.repredicted ? drivers::SearchKind::kRepredicted
                                        : drivers::SearchKind::kPredicted;

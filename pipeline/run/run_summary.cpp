@@ -25,9 +25,24 @@ void RunSummary::add(int frame, const SlamFrameResult& sr) {
     added += sr.added;
     retired += sr.retired;
     restored += sr.restored;
+    bearing_added += sr.bearing_added;
+    bearing_count += sr.bearing_count;
+    sum_bearing_nis += sr.bearing_nis_sum;
   }
+  ++right_camera_state_counts[std::clamp(sr.right_camera, 0, 3)];
+  if (sr.mono) {
+    ++mono_frames;
+    if (!prev_mono_) ++right_camera_losses;
+  }
+  prev_mono_ = sr.mono;
   ++frames;
-  if (r.tracked) {
+  if (sr.mono) {
+    // A pose from bearings of the map (camera loss): not an odometry failure.
+  } else if (sr.stereo_resumed && !r.tracked) {
+    // The first stereo frame after mono ones: the odometry's previous frame is stale; the pose
+    // comes from the filter's prediction and the landmark observations.
+    ++resumed_untracked;
+  } else if (r.tracked) {
     ++tracked;
     if (r.inliers > 0) {  // a motion was estimated (not the first frame)
       sum_motion_m2 += r.motion_rms_mahalanobis * r.motion_rms_mahalanobis;
@@ -77,7 +92,15 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
       .add("mode", config::toString(cfg.mode))
       .add("frames", s.frames)
       .add("frames_tracked", s.tracked)
-      .add("frames_without_pose", s.frames - s.tracked)
+      .add("frames_without_pose", s.frames - s.tracked - s.mono_frames - s.resumed_untracked)
+      // Camera loss: frames posed from the left image alone (bearings of the map), the times
+      // the right camera became unusable and why, frame by frame
+      .add("frames_monocular", s.mono_frames)
+      .add("right_camera_losses", s.right_camera_losses)
+      .add("frames_stereo_resumed_untracked", s.resumed_untracked)
+      .add("right_camera_missing_frames", s.right_camera_state_counts[1])
+      .add("right_camera_flat_frames", s.right_camera_state_counts[2])
+      .add("right_camera_frozen_frames", s.right_camera_state_counts[3])
       .add("source_frames_skipped", s.source_frames_skipped)
       .addRaw("without_pose_reasons", fails.str())
       .addRaw("without_pose_frames", list)
@@ -119,6 +142,14 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
         .add("mean_landmarks_predicted_visible", s.sum_visible / n, 1)
         .add("mean_landmark_search_no_match", s.sum_no_match / n, 2)
         .add("mean_landmark_search_no_stereo", s.sum_no_stereo / n, 2)
+        // Camera loss: landmarks initialised from bearings (seed 003), bearings accepted and
+        // their d^2 per dof (2 dof each)
+        .add("landmarks_added_from_bearings", s.bearing_added)
+        .add("bearing_observations", s.bearing_count)
+        .add("bearing_nis_per_dof",
+             s.bearing_count > 0 ? s.sum_bearing_nis / (2.0 * static_cast<double>(s.bearing_count))
+                                 : 0.0,
+             3)
         .add("ekf_median_ms", times.median("ekf"), 3);
   }
   if (s.source_frames_skipped > 0) j.add("source_skipped_frames", s.source_frames_skipped_detail);

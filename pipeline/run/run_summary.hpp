@@ -34,6 +34,15 @@ struct RunSummary {
   std::int64_t nis_count = 0;  // accepted landmark observations
   double sum_visible = 0, sum_no_match = 0, sum_no_stereo = 0;
   int max_in_state = 0, landmarks_in_map = 0, added = 0, retired = 0, restored = 0;
+  // Camera loss (slam_system.hpp): frames processed from the left image alone, the times the
+  // right camera became unusable, each frame's RightCameraState (ok, missing, flat, frozen),
+  // landmarks initialised from bearings, bearings accepted and their d^2 (2 dof each).
+  int mono_frames = 0, right_camera_losses = 0, bearing_added = 0;
+  int resumed_untracked = 0;  // first stereo frames after mono ones the odometry did not track
+  std::int64_t bearing_count = 0;
+  double sum_bearing_nis = 0;
+  std::int64_t right_camera_state_counts[4] = {0, 0, 0, 0};
+  bool prev_mono_ = false;
   // Frames of the recording the source left out (kitti: one side missing) and their names.
   int source_frames_skipped = 0;
   std::string source_frames_skipped_detail;

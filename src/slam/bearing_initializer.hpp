@@ -49,8 +49,9 @@ struct BearingInitParams {
   int num_samples = 500;           // accepted samples the Gaussian is fitted to, [10, 1e6]
   int max_draws = 1000000;         // drawn points before giving up, >= num_samples
   double box_sigmas = 4.0;         // box half-width in linearised sigmas, [2, 20]
-  double min_parallax_sigmas = 8;  // views wait until two bearings differ by this many sigmas
-                                   // (8 sigma: depth error about 18 %), >= 0
+  double min_parallax_sigmas = 20;  // views wait until two bearings differ by this many
+                                    // sigmas (20: depth error about 7 %; 8: 18 %, a larger
+                                    // drift on the camera-loss flights, docs/bearing_only.md)
   std::uint64_t seed = 1;          // random seed (with the caller's stream number)
   Status validate() const;
 };

@@ -48,6 +48,18 @@ struct SlamFrameResult {
   int restored = 0;  // retired anchored landmarks put back into the state
   int candidates = 0;
   int vme_matches = 0;  // matches given to the VME (non-landmarks)
+  // Camera loss: mono = the right image was not used for this frame (the pose comes from
+  // bearing observations of the map); right_camera = RightCameraState of this frame's right
+  // image (0 ok, 1 missing, 2 flat, 3 frozen). Bearings accepted and the sum of their d^2
+  // (2 dof each); landmarks initialised from bearings.
+  bool mono = false;
+  bool stereo_resumed = false;  // first stereo frame after mono ones (predicted by the filter:
+                                // the odometry's previous frame is stale and may fail)
+  int right_camera = 0;
+  double bearing_nis_sum = 0;
+  int bearing_count = 0;
+  int bearing_added = 0;
+  int mono_candidates = 0;
 };
 
 // What an estimator produces beyond the pose (which outputs a run writes).

@@ -96,7 +96,9 @@ int SlamSystem::bestStereoPoint(ImageView<const std::uint8_t> left,
 void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
                                  ImageView<const std::uint8_t> right, SlamFrameResult& out) {
   obs_.clear();
+  bobs_.clear();
   obs_uv_.clear();
+  const bool stereo = !right.empty();
   const int h = params_.patch_half_px;
   const Eigen::Isometry3d T_wc = ekf_.pose();
   const Matrix6d P_pose = ekf_.poseCovariance();
@@ -130,7 +132,7 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
   });
   int reperceptions = 0;
   for (const SearchPrediction& pr : preds) {
-    if (static_cast<int>(obs_.size()) >= params_.max_observations) break;
+    if (static_cast<int>(obs_uv_.size()) >= params_.max_observations) break;
     if (!pr.tracked && reperceptions >= params_.max_reperceptions) continue;
     if (!pr.tracked) ++reperceptions;
     const double tol = pr.tracked ? params_.track_tolerance_px : params_.reperception_tolerance_px;
@@ -143,7 +145,7 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     PatchStats ps;
     if (!warpTemplate(pr, T_wc.linear(), ps)) continue;
     const ImageView<const std::uint8_t> patch = templateView();
-    if (!pr.tracked) {
+    if (!pr.tracked && stereo) {
       // Re-perception: among this frame's stereo points near the prediction (cheap, and the
       // point already has its disparity).
       const int best_j = bestStereoPoint(left, patch, ps, pr, r);
@@ -191,6 +193,20 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
       u = static_cast<float>(u_ref);
       v = static_cast<float>(v_ref);
     }
+    const double err =
+        pr.tracked ? params_.track_matching_error_px : params_.reperception_matching_error_px;
+    if (!stereo) {
+      // Mono frame: the bearing, normalised image coordinates with the matching error.
+      const double f = calib_.f_px, s_xy = err / f;
+      bobs_.push_back({pr.id, Eigen::Vector2d((u - calib_.cx_px) / f, (v - calib_.cy_px) / f),
+                       s_xy * s_xy * Eigen::Matrix2d::Identity()});
+      obs_uv_.emplace_back(u, v);
+      if (pr.tracked)
+        ++out.observed;
+      else
+        ++out.reperceived;
+      continue;
+    }
     // Right image: along the row around the predicted disparity.
     const double dr = 3.0 * pr.sigma_d + 3.0;
     StereoMatch sm;
@@ -205,8 +221,6 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     tp.d_px = sm.d_px;
     tp.sigma_d_px = sm.sigma_d_px;
     StereoPoint sp;
-    const double err =
-        pr.tracked ? params_.track_matching_error_px : params_.reperception_matching_error_px;
     if (!vo_.observe(tp, err, sp)) continue;
     obs_.push_back({pr.id, sp.p_cam, sp.cov});
     obs_uv_.emplace_back(u, v);

@@ -1,7 +1,9 @@
 #pragma once
 // Parameters of the EKF SLAM system (slam/slam_system.hpp: the steps the comments refer to).
 #include "core/status.hpp"
+#include "slam/bearing_initializer.hpp"
 #include "slam/ekf_slam.hpp"
+#include "slam/right_camera_monitor.hpp"
 
 namespace svslam {
 
@@ -32,6 +34,19 @@ struct SlamSystemParams {
   int retire_unseen_frames = 2;       // a landmark unseen for fewer frames is never retired
   double lost_rot_sigma_rad = 0.035;  // prediction covariance when the VME fails
   double lost_trans_sigma_m = 0.5;
+  // Flying on when the right camera dies (slam_system.hpp, "Camera loss"): the monitor of the
+  // right image, the prediction while it is unusable (the filter's last motion, constant
+  // velocity, with these sigmas per frame), and the bearing-only initialisation of new
+  // landmarks from tracked left-image corners.
+  RightCameraParams right_camera;
+  double mono_rot_sigma_rad = 0.01;  // per frame, rad, > 0
+  double mono_trans_sigma_m = 0.2;   // per frame, m, > 0
+  BearingInitParams bearing_init;    // seed 003's initialisation (r_min_m, r_max_m, samples)
+  int mono_max_candidates = 64;      // left corners tracked toward initialisation, [0, 4096]
+  int mono_candidate_min_frames = 3;  // frames a corner is tracked before it may be initialised
+  int mono_candidate_max_frames = 30;  // dropped when not initialised by then, >= min
+  double mono_bearing_sigma_px = 1.0;  // angular error of a candidate's bearings, px, > 0
+  double mono_search_px = 20.0;        // search radius of a candidate around its prediction, px
   int map_reserve = 4096;  // landmarks held at once (in the state, anchored, or in the retired
                            // map) whose storage is preallocated (about 0.7 kB each),
                            // >= ekf.max_landmarks; beyond it the storage grows by doubling

@@ -9,7 +9,8 @@
 
 namespace svslam {
 
-void SlamSystem::restoreAnchors(ImageView<const std::uint8_t> left, SlamFrameResult& out) {
+void SlamSystem::restoreAnchors(ImageView<const std::uint8_t> left, SlamFrameResult& out,
+                                const std::vector<Eigen::Vector2f>* corners) {
   if (params_.max_reperceptions == 0) return;
   const Eigen::Isometry3d T_wc = ekf_.pose();
   const Matrix6d P_pose = ekf_.poseCovariance();
@@ -36,7 +37,9 @@ void SlamSystem::restoreAnchors(ImageView<const std::uint8_t> left, SlamFrameRes
     const int r = searchRadius(pr, params_.reperception_tolerance_px);
     PatchStats ps;
     if (!warpTemplate(pr, T_wc.linear(), ps)) continue;
-    if (bestStereoPoint(left, templateView(), ps, pr, r) < 0) continue;
+    if (corners ? !nearCornerMatches(left, templateView(), ps, pr, r, *corners)
+                : bestStereoPoint(left, templateView(), ps, pr, r) < 0)
+      continue;
     if (!makeRoom(out)) break;
     MapLandmark& lm = landmarks_.info(pr.id);
     if (!ekf_.restoreLandmark(pr.id, lm.p_world, lm.cov)) continue;
@@ -45,6 +48,21 @@ void SlamSystem::restoreAnchors(ImageView<const std::uint8_t> left, SlamFrameRes
     lm.last_seen_frame = frame_;
     ++out.restored;
   }
+}
+
+bool SlamSystem::nearCornerMatches(ImageView<const std::uint8_t> left,
+                                   ImageView<const std::uint8_t> patch, const PatchStats& ps,
+                                   const SearchPrediction& pr, int r,
+                                   const std::vector<Eigen::Vector2f>& corners) const {
+  const int h = params_.patch_half_px;
+  for (const Eigen::Vector2f& c : corners) {
+    const double du = c.x() - pr.u, dv = c.y() - pr.v;
+    if (du * du + dv * dv > static_cast<double>(r) * r) continue;
+    const int x = static_cast<int>(std::lround(c.x())), y = static_cast<int>(std::lround(c.y()));
+    if (patchInside(left, x, y, h) && zncc(patch, ps, left, x, y) > params_.reperception_min_zncc)
+      return true;
+  }
+  return false;
 }
 
 }  // namespace svslam

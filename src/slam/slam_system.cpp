@@ -36,6 +36,17 @@ Status SlamSystemParams::validate() const {
     return Status::invalidArgument("slam.lost_rot_sigma_rad and lost_trans_sigma_m must be > 0");
   if (!(map_voxel_m > 0.0) || !std::isfinite(map_voxel_m))
     return Status::invalidArgument("slam.map_voxel_m must be > 0 and finite");
+  if (Status s = right_camera.validate(); !s) return s;
+  if (Status s = bearing_init.validate(); !s) return s;
+  if (!(mono_rot_sigma_rad > 0.0) || !(mono_trans_sigma_m > 0.0))
+    return Status::invalidArgument("slam.mono_rot_sigma_rad and mono_trans_sigma_m must be > 0");
+  if (mono_max_candidates < 0 || mono_max_candidates > 4096)
+    return Status::invalidArgument("slam.mono_max_candidates must be in [0, 4096]");
+  if (mono_candidate_min_frames < 2 || mono_candidate_max_frames < mono_candidate_min_frames)
+    return Status::invalidArgument(
+        "slam.mono_candidate_min_frames must be >= 2 and <= mono_candidate_max_frames");
+  if (!(mono_bearing_sigma_px > 0.0) || !(mono_search_px > 0.0))
+    return Status::invalidArgument("slam.mono_bearing_sigma_px and mono_search_px must be > 0");
   if (map_reserve < ekf.max_landmarks)
     return Status::invalidArgument("slam.map_reserve must be >= max_landmarks");
   return Status::ok();
@@ -48,13 +59,21 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
       vo_(odometry, calib),
       ekf_(params.ekf),
       landmarks_(params.patch_half_px, params.map_reserve, params.map_voxel_m),
-      landmark_row_matcher_(odometry.stereo_match) {
+      landmark_row_matcher_(odometry.stereo_match),
+      right_monitor_(params.right_camera),
+      bearing_init_(params.bearing_init) {
   init_status_ = params.validate();
   if (init_status_) init_status_ = vo_.initStatus();
   if (init_status_) init_status_ = ekf_.initStatus();
   if (init_status_) init_status_ = landmark_row_matcher_.initStatus();
+  if (init_status_) init_status_ = bearing_init_.initStatus();
   cell_count_.resize(static_cast<std::size_t>(params.grid_cols * params.grid_rows));
   if (!init_status_) return;
+  mono_cands_.resize(static_cast<std::size_t>(params.mono_max_candidates));
+  mono_patches_.resize(static_cast<std::size_t>(params.mono_max_candidates) *
+                       static_cast<std::size_t>((2 * params.patch_half_px + 1) *
+                                                (2 * params.patch_half_px + 1)));
+  bobs_.reserve(static_cast<std::size_t>(params.max_observations));
   const std::size_t lm = static_cast<std::size_t>(params.ekf.max_landmarks);
   const std::size_t n_obs = static_cast<std::size_t>(params.max_observations);
   preds_.reserve(lm);
@@ -113,6 +132,13 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
                            Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;
   out = SlamFrameResult{};
+  const bool stereo_ok = right_monitor_.process(left, right);
+  out.right_camera = static_cast<int>(right_monitor_.state());
+  if (!stereo_ok) {
+    if (Status s = processMono(left, stereo, out, executor); !s) return s;
+    if (observer) observer->stageDone("ekf");
+    return Status::ok();
+  }
   if (Status s = vo_.frontEnd(left, stereo, out.odometry, observer); !s) return s;
   if (frame_ == 0) {
     prev_tracks_.clear();
@@ -133,27 +159,26 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
     anchor_patches_.clear();
     anchored_ids_.clear();
   } else {
-    Matrix6d R_u = od.covariance;
-    if (!od.tracked) {
-      R_u.setZero();
-      R_u.diagonal().head<3>().setConstant(params_.lost_rot_sigma_rad * params_.lost_rot_sigma_rad);
-      R_u.diagonal().tail<3>().setConstant(params_.lost_trans_sigma_m * params_.lost_trans_sigma_m);
+    if (prev_mono_) {
+      // The odometry's previous frame is the last stereo one: predict as in a mono frame.
+      out.stereo_resumed = true;
+      if (Status s = predictConstantVelocity(); !s) return s;
+    } else {
+      Matrix6d R_u = od.covariance;
+      if (!od.tracked) {
+        R_u.setZero();
+        R_u.diagonal().head<3>().setConstant(params_.lost_rot_sigma_rad *
+                                             params_.lost_rot_sigma_rad);
+        R_u.diagonal().tail<3>().setConstant(params_.lost_trans_sigma_m *
+                                             params_.lost_trans_sigma_m);
+      }
+      if (Status s = ekf_.predict(od.T_cur_prev, R_u); !s) return s;
     }
-    if (Status s = ekf_.predict(od.T_cur_prev, R_u); !s) return s;
     restoreAnchors(left, out);
     searchLandmarks(left, right, out);
     if (!obs_.empty()) {
       if (Status s = ekf_.update(obs_, results_, &executor); !s) return s;
-      for (std::size_t i = 0; i < obs_.size(); ++i) {
-        if (!results_[i].accepted) {
-          ++out.gated;
-          continue;
-        }
-        out.nis_sum += results_[i].mahalanobis_d2;
-        ++out.nis_count;
-        landmarks_.observed(obs_[i].id, frame_);
-        landmark_uv_.push_back(obs_uv_[i]);
-      }
+      applyObservations(out, false);
     }
   }
   selectLandmarks(left, out);
@@ -165,8 +190,31 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
   out.landmarks_in_map = landmarks_.size();
   prev_tracks_.swap(cur_tracks_);
   prev_landmark_uv_.swap(landmark_uv_);
+  last_motion_ = ekf_.pose().inverse() * prev_pose_;
+  prev_pose_ = ekf_.pose();
+  prev_mono_ = false;
+  for (MonoCandidate& c : mono_cands_) c.alive = false;
   ++frame_;
   return Status::ok();
+}
+
+void SlamSystem::applyObservations(SlamFrameResult& out, bool bearings) {
+  const std::size_t n = bearings ? bobs_.size() : obs_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!results_[i].accepted) {
+      ++out.gated;
+      continue;
+    }
+    if (bearings) {
+      out.bearing_nis_sum += results_[i].mahalanobis_d2;
+      ++out.bearing_count;
+    } else {
+      out.nis_sum += results_[i].mahalanobis_d2;
+      ++out.nis_count;
+    }
+    landmarks_.observed(results_[i].id, frame_);
+    landmark_uv_.push_back(obs_uv_[i]);
+  }
 }
 
 Status SlamSystem::applyLoopCorrection(const Eigen::Isometry3d& C_new_old,

@@ -47,6 +47,20 @@
 //     Only anchors come back (at most grid_cols x grid_rows x max_per_cell of them, a bounded
 //     cost per frame): any other landmark was initialised from a drifted pose and its error
 //     is mostly the error the current pose shares.
+// Camera loss (seed 000 part 2, seed 003): a RightCameraMonitor classifies each right image
+// (missing, flat, frozen). While it is unusable the frame is processed from the left image
+// alone: the stereo stage's points are not used; the prediction is the filter's last motion
+// (constant velocity) with mono_rot_sigma_rad / mono_trans_sigma_m; the landmarks of the state
+// are searched as in step 3 and observed by their bearing (EkfSlam::updateBearings, the same
+// matching errors); left corners (the stereo stage's detections, strongest first, in grid cells
+// short of landmarks) are tracked by ZNCC from frame to frame (their template follows them)
+// and, once tracked over mono_candidate_min_frames with a parallax between their first and
+// current bearing that BearingInitializer accepts, initialised from those two views (seed
+// 003: cone densities fused by rejection sampling into a Gaussian, carried into the current
+// camera frame and added with EkfSlam::addLandmark, so with its cross covariance with the
+// pose). The metric scale is held by the landmarks already mapped. When the right image is
+// usable again (after right_camera.resume_frames good frames) stereo resumes; its first frame
+// is predicted like a mono frame (the odometry's previous frame is stale).
 // Memory: every per-frame buffer is a member sized in the constructor (or grown once to the
 // frame's stereo point count); the map's bookkeeping is preallocated for map_reserve landmarks.
 // Once warm, a frame allocates nothing while the map holds fewer than map_reserve landmarks
@@ -64,8 +78,10 @@
 #include "core/status.hpp"
 #include "features/patch_similarity.hpp"
 #include "odometry/stereo_odometry.hpp"
+#include "slam/bearing_initializer.hpp"
 #include "slam/ekf_slam.hpp"
 #include "slam/estimator.hpp"
+#include "slam/right_camera_monitor.hpp"
 #include "slam/slam_params.hpp"
 #include "slam/landmark_manager.hpp"
 
@@ -101,16 +117,29 @@ class SlamSystem final : public Estimator {
   // Whether (u, v) lies within landmark_exclusion_px of one of `landmarks_uv` (px).
   bool nearLandmark(const std::vector<Eigen::Vector2f>& landmarks_uv, float u, float v) const;
   void passTracks();
-  // Searches the landmarks of the state in the current pair; fills obs_ / obs_uv_.
+  // Searches the landmarks of the state in the current pair; fills obs_ / obs_uv_ (stereo) or,
+  // when `right` is empty (mono frame), bobs_ / obs_uv_ with bearings.
   void searchLandmarks(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                        SlamFrameResult& out);
+  // A frame without the right image (camera loss); slam_mono.cpp.
+  Status processMono(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,
+                     SlamFrameResult& out, Executor& executor);
+  // The constant-velocity prediction of mono frames (and of the first stereo frame after them).
+  Status predictConstantVelocity();
+  void applyObservations(SlamFrameResult& out, bool bearings);
+  void trackMonoCandidates(ImageView<const std::uint8_t> left, SlamFrameResult& out);
+  void spawnMonoCandidates(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,
+                           SlamFrameResult& out);
   void selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameResult& out);
   // Records first-frame candidate p (stereo point and patch of `left`) as an anchor of `track`.
   void addAnchor(ImageView<const std::uint8_t> left, const TrackPoint& p, PointTrack& track);
   bool makeRoom(SlamFrameResult& out);
   // Brings retired anchored landmarks predicted in the current image and found there back into
   // the state (step 5); they are then observed as re-perceptions by searchLandmarks.
-  void restoreAnchors(ImageView<const std::uint8_t> left, SlamFrameResult& out);
+  // In a mono frame (`corners`: the left image's detected corners) a retired anchor is found
+  // among those corners instead of the stereo points.
+  void restoreAnchors(ImageView<const std::uint8_t> left, SlamFrameResult& out,
+                      const std::vector<Eigen::Vector2f>* corners = nullptr);
 
   // A landmark of the state predicted inside the current image (searchLandmarks).
   struct SearchPrediction {
@@ -140,6 +169,11 @@ class SlamSystem final : public Estimator {
   }
   // The current stereo point within r px of pr's pixel whose ZNCC against `patch` is highest
   // and at least reperception_min_zncc; -1 when none.
+  // Whether one of `corners` within r px of pr's pixel matches `patch` (ZNCC above
+  // reperception_min_zncc).
+  bool nearCornerMatches(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> patch,
+                         const PatchStats& ps, const SearchPrediction& pr, int r,
+                         const std::vector<Eigen::Vector2f>& corners) const;
   int bestStereoPoint(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> patch,
                       const PatchStats& ps, const SearchPrediction& pr, int r) const;
 
@@ -170,6 +204,29 @@ class SlamSystem final : public Estimator {
   std::vector<std::uint8_t> anchor_patches_;  // (4 patch_half_px + 1)^2 bytes per anchor
   Eigen::Isometry3d anchor_pose_ = Eigen::Isometry3d::Identity();  // T_world_cam, first frame
   std::vector<int> anchored_ids_;  // ids of the landmarks initialised from anchors
+  // Camera loss.
+  RightCameraMonitor right_monitor_;
+  BearingInitializer<3> bearing_init_;
+  std::vector<BearingObservation> bobs_;
+  // A left corner tracked toward bearing-only initialisation: its first view (camera position
+  // and bearing, world) and its last image position; its template (updated at every match) in
+  // mono_patches_ at slot * (2 patch_half_px + 1)^2.
+  struct MonoCandidate {
+    bool alive = false;
+    int first_frame = 0, frames = 0;
+    std::uint64_t serial = 0;  // stream of the bearing sampler
+    float u = 0, v = 0;        // last position, px
+    Eigen::Vector3d o0_w = Eigen::Vector3d::Zero(), d0_w = Eigen::Vector3d::Zero();
+    Eigen::Vector3d o_last_w = Eigen::Vector3d::Zero(), d_last_w = Eigen::Vector3d::Zero();
+  };
+  std::vector<MonoCandidate> mono_cands_;
+  std::vector<std::uint8_t> mono_patches_;
+  std::uint64_t mono_serial_ = 0;
+  std::vector<double> depth_scratch_;
+  std::vector<BearingView<3>> bearing_views_;
+  bool prev_mono_ = false;
+  Eigen::Isometry3d prev_pose_ = Eigen::Isometry3d::Identity();    // filter pose, last frame
+  Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();  // T_cur_prev of the filter
   int frame_ = 0;
 };
 

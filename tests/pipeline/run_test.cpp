@@ -81,6 +81,23 @@ TEST_F(Run, KittiOutputsAreCompleteAndDeterministic) {
   EXPECT_TRUE(t->poses.front().isApprox(Eigen::Isometry3d::Identity()));
 }
 
+// The right camera fails mid-flight (the synthetic source blacks it out): every frame still has
+// a finite pose, and stats.json says what happened.
+TEST_F(Run, RightCameraLossIsFlownOnAndReported) {
+  ASSERT_EQ(run("--source synthetic:width=320,height=240,frames=30,right_black_from=12,"
+                "right_black_to=20 --out " + path("a")),
+            0);
+  const std::string stats = slurp(path("a/stats.json"));
+  // Frames 12-19 black, stereo resumes at the third good frame (22): 10 mono frames.
+  for (const char* key : {"\"frames_without_pose\": 0", "\"frames_monocular\": 10",
+                          "\"right_camera_losses\": 1", "\"right_camera_flat_frames\": 8"})
+    EXPECT_NE(stats.find(key), std::string::npos) << key << " missing in " << stats;
+  auto t = svslam::drivers::readTrajectory(path("a/trajectory_kitti.txt"));
+  ASSERT_TRUE(t.isOk());
+  ASSERT_EQ(t->poses.size(), 30u);
+  for (const auto& T : t->poses) EXPECT_TRUE(T.matrix().allFinite());
+}
+
 TEST_F(Run, BadInputGivesAClearErrorAndNonZeroExit) {
   std::string err;
   EXPECT_NE(run("--source nowhere:x --out " + path("o"), &err), 0);

@@ -36,6 +36,7 @@ TEST(BearingInitializer, PlaneMatchesGridIntegration) {
   params.r_max_m = 1.2;
   params.num_samples = 40000;
   params.max_draws = 10000000;
+  params.min_parallax_sigmas = 8;  // the views below differ by 11 sigma
   BearingInitializer<2> init(params);
   ASSERT_TRUE(init.initStatus());
   const double sigma = 2 * kDeg;

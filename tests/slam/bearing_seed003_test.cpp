@@ -204,7 +204,7 @@ TEST(BearingSeed003, MovingTowardTheLandmarkIsWorst) {
   // The seed: 2.12, 1.17, 1.51, 13.99 cm.
   for (int t = 0; t < 3; ++t) EXPECT_LT(err[t], 4.0) << t;
   EXPECT_GT(err[3], 2.5 * std::max({err[0], err[1], err[2]}));
-  // With the default gate (8 sigma) the fourth trajectory's L3 waits for a better view.
+  // With the experiment's gate (8 sigma) the fourth trajectory's L3 waits for a better view.
   BearingInitializer<2> gated(seedParams(8));
   const Vector2d o1 = moves[3].first, o2 = moves[3].second;
   std::vector<BearingView<2>> views;

@@ -99,6 +99,10 @@ TEST(LcmMessages, PoseRejectsNaNAsymmetryAndBadRotation) {
   m2.status = 7;
   EXPECT_FALSE(fromLcm(m2).isOk());
   m2 = m;
+  m2.status = svslam_lcm::pose_t::MONOCULAR;  // the right camera lost: a valid status
+  ASSERT_TRUE(fromLcm(m2).isOk());
+  EXPECT_EQ(fromLcm(m2)->status, TrackingStatus::kMonocular);
+  m2 = m;
   m2.utime = std::numeric_limits<std::int64_t>::max();  // ns overflow
   EXPECT_FALSE(fromLcm(m2).isOk());
   m2 = m;

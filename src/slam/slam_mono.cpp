@@ -1,0 +1,236 @@
+// SlamSystem, camera loss (slam_system.hpp, "Camera loss"): a frame processed from the left
+// image alone. The landmarks of the state are observed by their bearing; new ones are
+// initialised from two bearings of a tracked left corner (seed 003, BearingInitializer).
+#include <algorithm>
+#include <cmath>
+
+#include "features/patch_similarity.hpp"
+#include "features/subpixel_refine.hpp"
+#include "slam/slam_system.hpp"
+
+namespace svslam {
+
+namespace {
+
+// The (2h+1)^2 patch of `img` centred on sub-pixel (u, v), bilinear, rounded to grey levels.
+// Precondition: (u, v) at least h + 1 pixels inside the image.
+void samplePatch(ImageView<const std::uint8_t> img, double u, double v, int h, std::uint8_t* out) {
+  const int x0 = static_cast<int>(std::floor(u)), y0 = static_cast<int>(std::floor(v));
+  const double ax = u - x0, ay = v - y0;
+  const double w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+  for (int dy = -h; dy <= h; ++dy) {
+    const std::uint8_t* r0 = img.row(y0 + dy);
+    const std::uint8_t* r1 = img.row(y0 + dy + 1);
+    for (int dx = -h; dx <= h; ++dx) {
+      const int x = x0 + dx;
+      const double g = w00 * r0[x] + w10 * r0[x + 1] + w01 * r1[x] + w11 * r1[x + 1];
+      *out++ = static_cast<std::uint8_t>(std::lround(std::clamp(g, 0.0, 255.0)));
+    }
+  }
+}
+
+bool insideWithMargin(ImageView<const std::uint8_t> img, double u, double v, int m) {
+  return u >= m && v >= m && u < img.width - m - 1 && v < img.height - m - 1;
+}
+
+}  // namespace
+
+Status SlamSystem::predictConstantVelocity() {
+  Matrix6d R_u = Matrix6d::Zero();
+  R_u.diagonal().head<3>().setConstant(params_.mono_rot_sigma_rad * params_.mono_rot_sigma_rad);
+  R_u.diagonal().tail<3>().setConstant(params_.mono_trans_sigma_m * params_.mono_trans_sigma_m);
+  return ekf_.predict(last_motion_, R_u);
+}
+
+Status SlamSystem::processMono(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,
+                               SlamFrameResult& out, Executor& executor) {
+  out.mono = true;
+  landmark_uv_.clear();
+  preds_.clear();
+  if (frame_ == 0) {
+    // No stereo pair yet: the world frame is the first camera; nothing fixes the scale.
+    if (Status s = ekf_.reset(Eigen::Isometry3d::Identity(), Matrix6d::Zero()); !s) return s;
+    anchor_pose_ = ekf_.pose();
+    anchor_points_.clear();
+    anchor_patches_.clear();
+    anchored_ids_.clear();
+  } else {
+    if (Status s = predictConstantVelocity(); !s) return s;
+    restoreAnchors(left, out, &stereo.corner_px);
+    searchLandmarks(left, ImageView<const std::uint8_t>(), out);
+    if (!bobs_.empty()) {
+      if (Status s = ekf_.updateBearings(bobs_, results_, &executor); !s) return s;
+      applyObservations(out, true);
+    }
+  }
+  trackMonoCandidates(left, out);
+  spawnMonoCandidates(left, stereo, out);
+  for (const MonoCandidate& c : mono_cands_) out.mono_candidates += c.alive ? 1 : 0;
+
+  out.T_world_cam = ekf_.pose();
+  out.pose_cov = ekf_.poseCovariance();
+  out.landmarks_in_state = ekf_.numLandmarks();
+  out.landmarks_in_map = landmarks_.size();
+  prev_landmark_uv_.swap(landmark_uv_);
+  last_motion_ = ekf_.pose().inverse() * prev_pose_;
+  prev_pose_ = ekf_.pose();
+  prev_mono_ = true;
+  ++frame_;
+  return Status::ok();
+}
+
+void SlamSystem::trackMonoCandidates(ImageView<const std::uint8_t> left, SlamFrameResult& out) {
+  const int h = params_.patch_half_px, side = 2 * h + 1;
+  const double f = calib_.f_px, cx = calib_.cx_px, cy = calib_.cy_px;
+  const Eigen::Isometry3d T = ekf_.pose();
+  const Eigen::Matrix3d Rt = T.linear().transpose();
+  const double sigma = params_.mono_bearing_sigma_px / f;
+  // Depth guess for the prediction: the median depth of the landmarks predicted in the image
+  // (the scene's scale), else the middle of the vision range.
+  double depth = 0.5 * (params_.bearing_init.r_min_m + params_.bearing_init.r_max_m);
+  if (!preds_.empty()) {
+    std::vector<double>& zs = depth_scratch_;
+    zs.clear();
+    for (const SearchPrediction& p : preds_) zs.push_back(p.z_cam.z());
+    std::nth_element(zs.begin(), zs.begin() + static_cast<std::ptrdiff_t>(zs.size() / 2), zs.end());
+    depth = zs[zs.size() / 2];
+  }
+  const auto bearingWorld = [&](double u, double v) {
+    return (T.linear() * Eigen::Vector3d((u - cx) / f, (v - cy) / f, 1.0)).normalized();
+  };
+  const int r = static_cast<int>(std::ceil(params_.mono_search_px));
+  for (std::size_t k = 0; k < mono_cands_.size(); ++k) {
+    MonoCandidate& c = mono_cands_[k];
+    if (!c.alive) continue;
+    c.alive = false;  // until found again
+    std::uint8_t* tmpl = mono_patches_.data() + k * static_cast<std::size_t>(side * side);
+    const Eigen::Vector3d p = Rt * (c.o_last_w + depth * c.d_last_w - T.translation());
+    if (!(p.z() > 0.1)) continue;
+    const int pu = static_cast<int>(std::lround(f * p.x() / p.z() + cx));
+    const int pv = static_cast<int>(std::lround(f * p.y() / p.z() + cy));
+    const int x0 = std::max(h + 2, pu - r), x1 = std::min(left.width - h - 3, pu + r);
+    const int y0 = std::max(h + 2, pv - r), y1 = std::min(left.height - h - 3, pv + r);
+    if (x1 < x0 || y1 < y0) continue;
+    const ImageView<const std::uint8_t> patch(tmpl, side, side, side);
+    const PatchStats ps = patchStats(patch, h, h, h);
+    if (ps.inv_norm == 0.0) continue;
+    int bx = -1, by = -1;
+    float best = params_.reperception_min_zncc;
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const float sc = zncc(patch, ps, left, x, y);
+        if (sc > best) {
+          best = sc;
+          bx = x;
+          by = y;
+        }
+      }
+    if (bx < 0) continue;
+    double u = bx, v = by;
+    double u_ref = 0, v_ref = 0;
+    if (refineTranslation(tmpl, h, left, u, v, SubpixelRefineParams{}, u_ref, v_ref) &&
+        std::abs(u_ref - bx) <= 1.0 && std::abs(v_ref - by) <= 1.0) {
+      u = u_ref;
+      v = v_ref;
+    }
+    if (!insideWithMargin(left, u, v, h + 2)) continue;
+    c.alive = true;
+    ++c.frames;
+    c.u = static_cast<float>(u);
+    c.v = static_cast<float>(v);
+    c.o_last_w = T.translation();
+    c.d_last_w = bearingWorld(u, v);
+    samplePatch(left, u, v, h, tmpl);  // the template follows the corner, centred on it
+    if (c.frames < params_.mono_candidate_min_frames) continue;
+    // Two views: the first and this one, from the rounded pixel (the centre of the patch the
+    // landmark keeps; the rounding, <= 0.5 px, is inside mono_bearing_sigma_px).
+    const int xi = static_cast<int>(std::lround(u)), yi = static_cast<int>(std::lround(v));
+    bearing_views_.assign({{c.o0_w, c.d0_w, sigma}, {T.translation(), bearingWorld(xi, yi), sigma}});
+    const std::vector<BearingView<3>>& views = bearing_views_;
+    BearingEstimate<3> est;
+    const Status s = bearing_init_.process(views, c.serial, est);
+    if (!s || est.outcome != BearingEstimate<3>::Outcome::kInitialised) {
+      if (c.frames >= params_.mono_candidate_max_frames) c.alive = false;
+      continue;
+    }
+    c.alive = false;
+    if (!makeRoom(out)) continue;
+    const Eigen::Vector3d z_cam = Rt * (est.mean_m - T.translation());
+    Eigen::Matrix3d R_z = Rt * est.cov_m2 * Rt.transpose();
+    R_z = 0.5 * (R_z + R_z.transpose()).eval();
+    auto id = ekf_.addLandmark(z_cam, R_z);
+    if (!id) continue;
+    landmarks_.add(*id, frame_, left, xi, yi, T, z_cam);
+    landmark_uv_.emplace_back(static_cast<float>(xi), static_cast<float>(yi));
+    ++out.bearing_added;
+    ++out.added;
+  }
+}
+
+void SlamSystem::spawnMonoCandidates(ImageView<const std::uint8_t> left,
+                                     const StereoStageOutput& stereo, SlamFrameResult& out) {
+  (void)out;
+  const int h = params_.patch_half_px, side = 2 * h + 1;
+  const double f = calib_.f_px, cx = calib_.cx_px, cy = calib_.cy_px;
+  auto cellOf = [&](float u, float v) {
+    const int gx = std::clamp(static_cast<int>(u * params_.grid_cols / calib_.width), 0,
+                              params_.grid_cols - 1);
+    const int gy = std::clamp(static_cast<int>(v * params_.grid_rows / calib_.height), 0,
+                              params_.grid_rows - 1);
+    return static_cast<std::size_t>(gy * params_.grid_cols + gx);
+  };
+  std::fill(cell_count_.begin(), cell_count_.end(), 0);
+  for (const Eigen::Vector2f& l : prev_landmark_uv_) ++cell_count_[cellOf(l.x(), l.y())];
+  for (const Eigen::Vector2f& l : landmark_uv_) ++cell_count_[cellOf(l.x(), l.y())];
+  std::size_t free_slots = 0;
+  for (const MonoCandidate& c : mono_cands_) {
+    if (c.alive)
+      ++cell_count_[cellOf(c.u, c.v)];
+    else
+      ++free_slots;
+  }
+  if (free_slots == 0) return;
+  // Strongest corners first (ties: ascending index).
+  std::vector<int>& order = fresh_;
+  order.clear();
+  for (std::size_t j = 0; j < stereo.corner_px.size(); ++j) order.push_back(static_cast<int>(j));
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    const float ra = stereo.corner_resp[static_cast<std::size_t>(a)],
+                rb = stereo.corner_resp[static_cast<std::size_t>(b)];
+    return ra != rb ? ra > rb : a < b;
+  });
+  const Eigen::Isometry3d T = ekf_.pose();
+  const float min_d2 = static_cast<float>(4 * h * h);
+  std::size_t slot = 0;
+  for (const int j : order) {
+    if (free_slots == 0) break;
+    const Eigen::Vector2f& px = stereo.corner_px[static_cast<std::size_t>(j)];
+    if (!insideWithMargin(left, px.x(), px.y(), h + 2)) continue;
+    const std::size_t cell = cellOf(px.x(), px.y());
+    if (cell_count_[cell] >= params_.max_per_cell) continue;
+    bool crowded = false;  // within 2 h px of a landmark seen now or of a candidate
+    for (const Eigen::Vector2f& l : landmark_uv_)
+      crowded = crowded || (l - px).squaredNorm() < min_d2;
+    for (const MonoCandidate& c : mono_cands_)
+      crowded = crowded || (c.alive && (Eigen::Vector2f(c.u, c.v) - px).squaredNorm() < min_d2);
+    if (crowded) continue;
+    while (mono_cands_[slot].alive) ++slot;
+    MonoCandidate& c = mono_cands_[slot];
+    c = MonoCandidate{};
+    c.alive = true;
+    c.first_frame = frame_;
+    c.frames = 1;
+    c.serial = mono_serial_++;
+    c.u = px.x();
+    c.v = px.y();
+    c.o0_w = c.o_last_w = T.translation();
+    c.d0_w = c.d_last_w =
+        (T.linear() * Eigen::Vector3d((px.x() - cx) / f, (px.y() - cy) / f, 1.0)).normalized();
+    samplePatch(left, px.x(), px.y(), h,
+                mono_patches_.data() + slot * static_cast<std::size_t>(side * side));
+    ++cell_count_[cell];
+    --free_slots;
+  }
+}
+
+}  // namespace svslam
