@@ -64,7 +64,7 @@ Status SlamSystem::processMono(ImageView<const std::uint8_t> left, const StereoS
     }
   }
   trackMonoCandidates(left, out);
-  spawnMonoCandidates(left, stereo, out);
+  spawnMonoCandidates(left, stereo);
   for (const MonoCandidate& c : mono_cands_) out.mono_candidates += c.alive ? 1 : 0;
 
   out.T_world_cam = ekf_.pose();
@@ -168,8 +168,7 @@ void SlamSystem::trackMonoCandidates(ImageView<const std::uint8_t> left, SlamFra
 }
 
 void SlamSystem::spawnMonoCandidates(ImageView<const std::uint8_t> left,
-                                     const StereoStageOutput& stereo, SlamFrameResult& out) {
-  (void)out;
+                                     const StereoStageOutput& stereo) {
   const int h = params_.patch_half_px, side = 2 * h + 1;
   const double f = calib_.f_px, cx = calib_.cx_px, cy = calib_.cy_px;
   auto cellOf = [&](float u, float v) {
@@ -194,9 +193,10 @@ void SlamSystem::spawnMonoCandidates(ImageView<const std::uint8_t> left,
   std::vector<int>& order = fresh_;
   order.clear();
   for (std::size_t j = 0; j < stereo.corner_px.size(); ++j) order.push_back(static_cast<int>(j));
+  const bool have_resp = stereo.corner_resp.size() == stereo.corner_px.size();
   std::sort(order.begin(), order.end(), [&](int a, int b) {
-    const float ra = stereo.corner_resp[static_cast<std::size_t>(a)],
-                rb = stereo.corner_resp[static_cast<std::size_t>(b)];
+    const float ra = have_resp ? stereo.corner_resp[static_cast<std::size_t>(a)] : 0.0f,
+                rb = have_resp ? stereo.corner_resp[static_cast<std::size_t>(b)] : 0.0f;
     return ra != rb ? ra > rb : a < b;
   });
   const Eigen::Isometry3d T = ekf_.pose();

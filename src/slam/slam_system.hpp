@@ -128,8 +128,7 @@ class SlamSystem final : public Estimator {
   Status predictConstantVelocity();
   void applyObservations(SlamFrameResult& out, bool bearings);
   void trackMonoCandidates(ImageView<const std::uint8_t> left, SlamFrameResult& out);
-  void spawnMonoCandidates(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,
-                           SlamFrameResult& out);
+  void spawnMonoCandidates(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo);
   void selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameResult& out);
   // Records first-frame candidate p (stereo point and patch of `left`) as an anchor of `track`.
   void addAnchor(ImageView<const std::uint8_t> left, const TrackPoint& p, PointTrack& track);
