@@ -36,8 +36,15 @@ Status SlamSystemParams::validate() const {
     return Status::invalidArgument("slam.lost_rot_sigma_rad and lost_trans_sigma_m must be > 0");
   if (!(map_voxel_m > 0.0) || !std::isfinite(map_voxel_m))
     return Status::invalidArgument("slam.map_voxel_m must be > 0 and finite");
-  if (Status s = right_camera.validate(); !s) return s;
-  if (Status s = bearing_init.validate(); !s) return s;
+  // The bearing initialiser's and the monitor's own checks, named by their configuration keys.
+  if (!(bearing_init.r_min_m > 0) || !(bearing_init.r_max_m > bearing_init.r_min_m) ||
+      !std::isfinite(bearing_init.r_max_m))
+    return Status::invalidArgument(
+        "slam.bearing_r_min_m must be > 0 and slam.bearing_r_max_m finite and > it");
+  if (Status s = bearing_init.validate(); !s)
+    return Status::invalidArgument("slam.bearing_* (" + s.message() + ")");
+  if (Status s = right_camera.validate(); !s)
+    return Status::invalidArgument("slam.right_camera_* (" + s.message() + ")");
   if (!(mono_rot_sigma_rad > 0.0) || !(mono_trans_sigma_m > 0.0))
     return Status::invalidArgument("slam.mono_rot_sigma_rad and mono_trans_sigma_m must be > 0");
   if (mono_max_candidates < 0 || mono_max_candidates > 4096)

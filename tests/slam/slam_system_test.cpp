@@ -262,6 +262,20 @@ TEST(SlamSystem, BadParamsAndInput) {
   StereoCalibration c{500, 160, 120, 0.5, 320, 240};
   SlamSystem bad(p, StereoOdometryParams{}, c);
   EXPECT_NE(bad.initStatus().message().find("candidate_fraction"), std::string::npos);
+  // Camera-loss parameters are named by their configuration keys.
+  p = SlamSystemParams{};
+  p.bearing_init.r_max_m = 0.1;
+  EXPECT_NE(SlamSystem(p, StereoOdometryParams{}, c).initStatus().message().find(
+                "slam.bearing_r_max_m"),
+            std::string::npos);
+  p = SlamSystemParams{};
+  p.right_camera.resume_frames = 0;
+  EXPECT_NE(SlamSystem(p, StereoOdometryParams{}, c).initStatus().message().find(
+                "slam.right_camera_"),
+            std::string::npos);
+  p = SlamSystemParams{};
+  p.mono_candidate_max_frames = 1;
+  EXPECT_FALSE(SlamSystem(p, StereoOdometryParams{}, c).initStatus().isOk());
   FrameByFrame ok(StereoOdometryParams{}, c,
                   std::make_unique<SlamSystem>(SlamSystemParams{}, StereoOdometryParams{}, c));
   ASSERT_TRUE(ok.initStatus().isOk());
