@@ -45,7 +45,6 @@ Status EkfSlam::updateBearings(const std::vector<BearingObservation>& obs,
   }
   results.resize(obs.size());
   const Matrix6d P_pp = poseCovariance();
-  std::size_t n_accepted = 0;
   for (std::size_t k = 0; k < obs.size(); ++k) {
     const int s = slotOf(obs[k].id), o = 6 + 3 * s;
     Eigen::Vector2d xy;
@@ -64,21 +63,10 @@ Status EkfSlam::updateBearings(const std::vector<BearingObservation>& obs,
       if (llt.info() == Eigen::Success) d2 = nu.dot(llt.solve(nu));
     }
     results[k] = {obs[k].id, d2 <= params_.bearing_gate_chi2, d2};
-    n_accepted += results[k].accepted ? 1 : 0;
   }
-  const std::size_t batch = static_cast<std::size_t>(params_.max_batch_observations);
-  std::size_t k = 0;
-  while (n_accepted > 0 && k < obs.size()) {
-    accepted_.clear();
-    for (; k < obs.size() && accepted_.size() < batch; ++k)
-      if (results[k].accepted) accepted_.push_back(static_cast<int>(k));
-    if (accepted_.empty()) break;
-    if (Status st = applyBearingBatch(obs, accepted_.data(), static_cast<int>(accepted_.size()),
-                                      executor);
-        !st)
-      return st;
-  }
-  return Status::ok();
+  return applyAcceptedInBatches(results, [&](const int* idx, int count) {
+    return applyBearingBatch(obs, idx, count, executor);
+  });
 }
 
 Status EkfSlam::applyBearingBatch(const std::vector<BearingObservation>& obs, const int* idx,

@@ -197,7 +197,6 @@ Status EkfSlam::update(const std::vector<LandmarkObservation>& obs,
   // Gating of every observation against the state before any update:
   // S_i = H_p P_pp H_p^T + H_p P_pm H_m^T + H_m P_mp H_p^T + H_m P_mm H_m^T + R_i.
   const Matrix6d P_pp = poseCovariance();
-  std::size_t n_accepted = 0;
   for (std::size_t k = 0; k < obs.size(); ++k) {
     const int s = slotOf(obs[k].id), o = 6 + 3 * s;
     Matrix36d H_p;
@@ -214,21 +213,10 @@ Status EkfSlam::update(const std::vector<LandmarkObservation>& obs,
     double d2 = std::numeric_limits<double>::infinity();
     if (llt.info() == Eigen::Success) d2 = nu.dot(llt.solve(nu));
     results[k] = {obs[k].id, d2 <= params_.gate_chi2, d2};
-    n_accepted += results[k].accepted ? 1 : 0;
   }
   // Accepted observations, stacked in batches.
-  const std::size_t batch = static_cast<std::size_t>(params_.max_batch_observations);
-  std::size_t k = 0;
-  while (n_accepted > 0 && k < obs.size()) {
-    accepted_.clear();
-    for (; k < obs.size() && accepted_.size() < batch; ++k)
-      if (results[k].accepted) accepted_.push_back(static_cast<int>(k));
-    if (accepted_.empty()) break;
-    if (Status s = applyBatch(obs, accepted_.data(), static_cast<int>(accepted_.size()), executor);
-        !s)
-      return s;
-  }
-  return Status::ok();
+  return applyAcceptedInBatches(
+      results, [&](const int* idx, int count) { return applyBatch(obs, idx, count, executor); });
 }
 
 Status EkfSlam::applyBatch(const std::vector<LandmarkObservation>& obs, const int* idx, int count,

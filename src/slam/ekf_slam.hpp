@@ -199,6 +199,21 @@ class EkfSlam {
                     Executor* executor);
   Status applyBearingBatch(const std::vector<BearingObservation>& obs, const int* idx, int count,
                            Executor* executor);
+  // The accepted entries of `results`, in order, in batches of at most max_batch_observations:
+  // apply(indices, count) for each batch; stops at the first failing batch.
+  template <class ApplyBatch>
+  Status applyAcceptedInBatches(const std::vector<ObservationResult>& results, ApplyBatch apply) {
+    const std::size_t batch = static_cast<std::size_t>(params_.max_batch_observations);
+    std::size_t k = 0;
+    while (k < results.size()) {
+      accepted_.clear();
+      for (; k < results.size() && accepted_.size() < batch; ++k)
+        if (results[k].accepted) accepted_.push_back(static_cast<int>(k));
+      if (accepted_.empty()) break;
+      if (Status s = apply(accepted_.data(), static_cast<int>(accepted_.size())); !s) return s;
+    }
+    return Status::ok();
+  }
   // The update from the stacked M = P H^T (B_, n x m), innovation nu_ (m) and S_ (m x m,
   // H P H^T + R, not yet symmetrised): gain, state injection and covariance.
   Status applyStacked(int m, Executor* executor);

@@ -263,16 +263,18 @@ void SlamSystem::addAnchor(ImageView<const std::uint8_t> left, const TrackPoint&
                                           p.d_px, p.sigma_d_px, params_.init_sigma_uv_px));
 }
 
+std::size_t SlamSystem::gridCell(float u, float v) const {
+  const int cx =
+      std::clamp(static_cast<int>(u * params_.grid_cols / calib_.width), 0, params_.grid_cols - 1);
+  const int cy = std::clamp(static_cast<int>(v * params_.grid_rows / calib_.height), 0,
+                            params_.grid_rows - 1);
+  return static_cast<std::size_t>(cy * params_.grid_cols + cx);
+}
+
 void SlamSystem::selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameResult& out) {
   const auto& pts = vo_.points();
   const int h = params_.patch_half_px;
-  auto cellOf = [&](float u, float v) {
-    const int cx = std::clamp(static_cast<int>(u * params_.grid_cols / calib_.width), 0,
-                              params_.grid_cols - 1);
-    const int cy = std::clamp(static_cast<int>(v * params_.grid_rows / calib_.height), 0,
-                              params_.grid_rows - 1);
-    return static_cast<std::size_t>(cy * params_.grid_cols + cx);
-  };
+  const auto cellOf = [&](float u, float v) { return gridCell(u, v); };
   auto sigmaOf = [](const TrackPoint& p) { return std::sqrt(p.cov.trace()); };
   auto nearObserved = [&](const TrackPoint& p) {
     return nearLandmark(landmark_uv_, p.u_px, p.v_px);

@@ -36,10 +36,8 @@ bool insideWithMargin(ImageView<const std::uint8_t> img, double u, double v, int
 }  // namespace
 
 Status SlamSystem::predictConstantVelocity() {
-  Matrix6d R_u = Matrix6d::Zero();
-  R_u.diagonal().head<3>().setConstant(params_.mono_rot_sigma_rad * params_.mono_rot_sigma_rad);
-  R_u.diagonal().tail<3>().setConstant(params_.mono_trans_sigma_m * params_.mono_trans_sigma_m);
-  return ekf_.predict(last_motion_, R_u);
+  return ekf_.predict(last_motion_,
+                      diagonalMotionCov(params_.mono_rot_sigma_rad, params_.mono_trans_sigma_m));
 }
 
 Status SlamSystem::processMono(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,
@@ -49,11 +47,7 @@ Status SlamSystem::processMono(ImageView<const std::uint8_t> left, const StereoS
   preds_.clear();
   if (frame_ == 0) {
     // No stereo pair yet: the world frame is the first camera; nothing fixes the scale.
-    if (Status s = ekf_.reset(Eigen::Isometry3d::Identity(), Matrix6d::Zero()); !s) return s;
-    anchor_pose_ = ekf_.pose();
-    anchor_points_.clear();
-    anchor_patches_.clear();
-    anchored_ids_.clear();
+    if (Status s = startMap(); !s) return s;
   } else {
     if (Status s = predictConstantVelocity(); !s) return s;
     restoreAnchors(left, out, &stereo.corner_px);
@@ -171,13 +165,7 @@ void SlamSystem::spawnMonoCandidates(ImageView<const std::uint8_t> left,
                                      const StereoStageOutput& stereo) {
   const int h = params_.patch_half_px, side = 2 * h + 1;
   const double f = calib_.f_px, cx = calib_.cx_px, cy = calib_.cy_px;
-  auto cellOf = [&](float u, float v) {
-    const int gx = std::clamp(static_cast<int>(u * params_.grid_cols / calib_.width), 0,
-                              params_.grid_cols - 1);
-    const int gy = std::clamp(static_cast<int>(v * params_.grid_rows / calib_.height), 0,
-                              params_.grid_rows - 1);
-    return static_cast<std::size_t>(gy * params_.grid_cols + gx);
-  };
+  const auto cellOf = [&](float u, float v) { return gridCell(u, v); };
   std::fill(cell_count_.begin(), cell_count_.end(), 0);
   for (const Eigen::Vector2f& l : prev_landmark_uv_) ++cell_count_[cellOf(l.x(), l.y())];
   for (const Eigen::Vector2f& l : landmark_uv_) ++cell_count_[cellOf(l.x(), l.y())];

@@ -160,25 +160,16 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
 
   landmark_uv_.clear();
   if (frame_ == 0) {
-    if (Status s = ekf_.reset(Eigen::Isometry3d::Identity(), Matrix6d::Zero()); !s) return s;
-    anchor_pose_ = ekf_.pose();
-    anchor_points_.clear();
-    anchor_patches_.clear();
-    anchored_ids_.clear();
+    if (Status s = startMap(); !s) return s;
   } else {
     if (prev_mono_) {
       // The odometry's previous frame is the last stereo one: predict as in a mono frame.
       out.stereo_resumed = true;
       if (Status s = predictConstantVelocity(); !s) return s;
     } else {
-      Matrix6d R_u = od.covariance;
-      if (!od.tracked) {
-        R_u.setZero();
-        R_u.diagonal().head<3>().setConstant(params_.lost_rot_sigma_rad *
-                                             params_.lost_rot_sigma_rad);
-        R_u.diagonal().tail<3>().setConstant(params_.lost_trans_sigma_m *
-                                             params_.lost_trans_sigma_m);
-      }
+      const Matrix6d R_u =
+          od.tracked ? od.covariance
+                     : diagonalMotionCov(params_.lost_rot_sigma_rad, params_.lost_trans_sigma_m);
       if (Status s = ekf_.predict(od.T_cur_prev, R_u); !s) return s;
     }
     restoreAnchors(left, out);
@@ -203,6 +194,22 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
   for (MonoCandidate& c : mono_cands_) c.alive = false;
   ++frame_;
   return Status::ok();
+}
+
+Status SlamSystem::startMap() {
+  if (Status s = ekf_.reset(Eigen::Isometry3d::Identity(), Matrix6d::Zero()); !s) return s;
+  anchor_pose_ = ekf_.pose();
+  anchor_points_.clear();
+  anchor_patches_.clear();
+  anchored_ids_.clear();
+  return Status::ok();
+}
+
+Matrix6d SlamSystem::diagonalMotionCov(double rot_sigma_rad, double trans_sigma_m) {
+  Matrix6d R_u = Matrix6d::Zero();
+  R_u.diagonal().head<3>().setConstant(rot_sigma_rad * rot_sigma_rad);
+  R_u.diagonal().tail<3>().setConstant(trans_sigma_m * trans_sigma_m);
+  return R_u;
 }
 
 void SlamSystem::applyObservations(SlamFrameResult& out, bool bearings) {

@@ -126,6 +126,13 @@ class SlamSystem final : public Estimator {
                      SlamFrameResult& out, Executor& executor);
   // The constant-velocity prediction of mono frames (and of the first stereo frame after them).
   Status predictConstantVelocity();
+  // Frame 0: the filter at the world origin with an exact pose, no anchor yet.
+  Status startMap();
+  // diag(rot^2 I3, trans^2 I3), [dtheta (rad), dt (m)]: the motion covariance of a predicted
+  // (not measured) frame.
+  static Matrix6d diagonalMotionCov(double rot_sigma_rad, double trans_sigma_m);
+  // The representativeness-grid cell (grid_cols x grid_rows over the image) of pixel (u, v).
+  std::size_t gridCell(float u, float v) const;
   void applyObservations(SlamFrameResult& out, bool bearings);
   void trackMonoCandidates(ImageView<const std::uint8_t> left, SlamFrameResult& out);
   void spawnMonoCandidates(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo);
