@@ -273,8 +273,9 @@ int runPipeline(const std::vector<std::string>& args) {
   p.addOption("out", "DIR", "output folder (created if missing)", "svslam_out");
   p.addOption("max-frames", "N", "stop after N frames (0 = all; overrides the config)");
   p.addOption("threads", "T", "worker threads inside the stereo stage (overrides the config)");
-  p.addOption("mode", "ekf|vo",
-              "ekf: EKF SLAM over pose and landmarks; vo: pure visual odometry (overrides the "
+  p.addOption("mode", "ekf|vo|mono",
+              "ekf: EKF SLAM over pose and landmarks; vo: pure visual odometry; mono: EKF SLAM "
+              "from the left camera, the first stereo pair giving the scale (overrides the "
               "config; default ekf)");
   p.addFlag("sequential", "run every stage on one thread (same outputs as the threaded run)");
   p.addOption("rate", "HZ",

@@ -107,6 +107,9 @@ ConfigSection mapConfigSection() {
              "floor of every cell's height standard deviation (model error of dense stereo)"),
       number("max_tiles", SVSLAM_FIELD(dem.max_tiles), 1, 1000000, "",
              "bound on the tiles in memory (64 x 64 cells x 12 B = 48 KiB each)"),
+      number("max_raster_mcells", SVSLAM_FIELD(dem.max_raster_mcells), 1, 4096, "",
+             "bound on the written map raster (bounding box of the tiles), millions of cells "
+             "(13 B each); a larger map is not written, with an error"),
       geoOriginKey(),
       number("publish_period_s", SVSLAM_FIELD(map_publish_period_s), 0.01, 3600, "s",
              "tiles changed since the last period go to lcm.map_tile_channel every this many s"),

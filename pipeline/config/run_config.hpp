@@ -21,10 +21,11 @@
 
 namespace svslam::config {
 
-// kEkf: EKF SLAM over pose and landmarks; kVo: pure visual odometry (slam/estimator.hpp).
+// kEkf: EKF SLAM over pose and landmarks; kVo: pure visual odometry; kMono: EKF SLAM from the
+// left camera, scale from the first pair (slam/estimator.hpp).
 using EstimatorMode = EstimatorKind;
-inline constexpr EnumNames<EstimatorMode, 2> kEstimatorModeNames{
-    {{"ekf", EstimatorMode::kEkf}, {"vo", EstimatorMode::kVo}}};
+inline constexpr EnumNames<EstimatorMode, 3> kEstimatorModeNames{
+    {{"ekf", EstimatorMode::kEkf}, {"vo", EstimatorMode::kVo}, {"mono", EstimatorMode::kMono}}};
 const char* toString(EstimatorMode m);
 
 inline StereoOdometryParams runOdometryDefaults() {

@@ -33,7 +33,8 @@ ConfigSection topLevel() {
       unsignedInt("seed", SVSLAM_FIELD(seed),
                   "seeds every random choice (RANSAC); same input + config = same output"),
       choice("mode", SVSLAM_FIELD(mode), kEstimatorModeNames,
-             "ekf: EKF SLAM filter (seed 001 sec 4); vo: pure visual odometry"),
+             "ekf: EKF SLAM filter (seed 001 sec 4); vo: pure visual odometry; mono: the EKF from "
+             "the left camera alone (bearing observations), the first stereo pair gives the scale"),
   };
   return s;
 }

@@ -68,10 +68,17 @@ ConfigSection slamConfigSection() {
       number("right_camera_resume_frames", SVSLAM_FIELD(slam.right_camera.resume_frames), 1, 1000,
              "", "consecutive usable right images before stereo resumes"),
       number("mono_rot_sigma_rad", SVSLAM_FIELD(slam.mono_rot_sigma_rad), 1e-6, 10, "rad",
-             "prediction covariance (rotation, per frame) of a frame without the right camera "
+             "prediction sigma (rotation, per frame) of a frame without the right camera "
              "(constant velocity)"),
-      number("mono_trans_sigma_m", SVSLAM_FIELD(slam.mono_trans_sigma_m), 1e-6, 1000, "m",
-             "prediction covariance (translation, per frame) of a frame without the right camera"),
+      number("mono_trans_sigma_m", SVSLAM_FIELD(slam.mono_trans_sigma_m), 0, 1000, "m",
+             "prediction sigma (translation, per frame) of a frame without the right camera: "
+             "this floor plus mono_trans_speed_fraction times the last frame's translation"),
+      number("mono_trans_speed_fraction", SVSLAM_FIELD(slam.mono_trans_speed_fraction), 0, 100,
+             "", "part of the prediction's translation sigma proportional to the speed"),
+      number("mono_start_rot_sigma_rad", SVSLAM_FIELD(slam.mono_start_rot_sigma_rad), 1e-6, 10,
+             "rad", "mode mono: prediction sigma (rotation) of the second frame (no velocity yet)"),
+      number("mono_start_trans_sigma_m", SVSLAM_FIELD(slam.mono_start_trans_sigma_m), 1e-6, 1000,
+             "m", "mode mono: prediction sigma (translation) of the second frame"),
       number("bearing_gate_chi2", SVSLAM_FIELD(slam.ekf.bearing_gate_chi2), 0.1, 1000, "",
              "Mahalanobis d^2 gate of a bearing observation, chi-square 2 dof (99 %)"),
       number("bearing_r_min_m", SVSLAM_FIELD(slam.bearing_init.r_min_m), 1e-3, 1e5, "m",
@@ -93,6 +100,11 @@ ConfigSection slamConfigSection() {
              "angular error of a tracked corner's bearings"),
       number("mono_search_px", SVSLAM_FIELD(slam.mono_search_px), 1, 1000, "px",
              "search radius of a tracked corner around its prediction"),
+      number("mono_track_error_px", SVSLAM_FIELD(slam.mono_track_error_px), 1e-3, 100, "px",
+             "matching error of a bearing observation of a landmark tracked from the previous "
+             "frame (no right image checks it)"),
+      number("mono_reperception_error_px", SVSLAM_FIELD(slam.mono_reperception_error_px), 1e-3,
+             100, "px", "matching error of a re-perceived landmark's bearing observation"),
   };
   return s;
 }

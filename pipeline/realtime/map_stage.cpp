@@ -125,7 +125,7 @@ const drivers::GeoOrigin* MapStage::geoOrigin(drivers::GeoOrigin& storage) const
 
 Status MapStage::writeFiles(const std::string& dir) {
   map::DemRaster r;
-  map_->toRaster(r);
+  if (Status s = map_->toRaster(r); !s) return s;
   drivers::GeoOrigin geo;
   const drivers::GeoOrigin* g = geoOrigin(geo);
   if (Status s = drivers::writeDemGeoTiff(dir + "/" + run::files::kDem, r, g); !s) return s;
@@ -165,7 +165,7 @@ Status MapStage::writeReplaced(
   if (Status s = replacer.process(*map_, C, out, st); !s)
     return Status(s.code(), "map re-placement: " + s.message());
   map::DemRaster r;
-  out.toRaster(r);
+  if (Status s = out.toRaster(r); !s) return Status(s.code(), "map re-placement: " + s.message());
   drivers::GeoOrigin geo;
   const drivers::GeoOrigin* g = geoOrigin(geo);
   const std::string dir = out_dir_ + "/";

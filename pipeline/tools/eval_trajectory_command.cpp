@@ -29,8 +29,10 @@ int runEvalTrajectory(const std::vector<std::string>& args) {
   p.addOption("segments", "L1,L2,...", "segment lengths in metres",
               "100,200,300,400,500,600,700,800");
   p.addOption("step", "N", "first frames of segments every N frames (KITTI devkit: 10)", "10");
-  p.addOption("align", "se3|none",
-              "se3: Umeyama rigid alignment; none: both relative to their first pose", "se3");
+  p.addOption("align", "se3|sim3|none",
+              "se3: Umeyama rigid alignment; sim3: Umeyama with scale (estimates up to scale, "
+              "monocular); none: both relative to their first pose",
+              "se3");
   p.addOption("max-dt", "S", "largest stamp difference when pairing TUM files, seconds", "0.02");
   p.addOption("cov", "FILE",
               "pose covariances of the estimate (svslam run's pose_covariance.txt: 36 numbers "
@@ -55,11 +57,13 @@ int runEvalTrajectory(const std::vector<std::string>& args) {
   params.step_frames = *step;
   if (p.get("align") == "se3") {
     params.align = TrajectoryAlignment::kSe3;
+  } else if (p.get("align") == "sim3") {
+    params.align = TrajectoryAlignment::kSim3;
   } else if (p.get("align") == "none") {
     params.align = TrajectoryAlignment::kNone;
   } else {
     return fail(Status::invalidArgument("--align: unknown alignment '" + p.get("align") +
-                                        "' (use se3 or none)"));
+                                        "' (use se3, sim3 or none)"));
   }
   if (Status s = params.validate(); !s) return fail(s);
   auto max_dt = p.getDouble("max-dt");
@@ -146,6 +150,7 @@ int runEvalTrajectory(const std::vector<std::string>& args) {
   j.addRaw("segments", segs)
       .add("align", p.get("align"))
       .add("ate_rmse_m", m->ate_rmse_m)
+      .add("align_scale", m->align_scale, 6)
       .add("rpe_trans_rmse_m", m->rpe_trans_rmse_m)
       .add("rpe_rot_rmse_deg", m->rpe_rot_rmse_deg)
       .add("final_pos_err_m", m->final_pos_err_m)

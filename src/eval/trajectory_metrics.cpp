@@ -30,8 +30,11 @@ double rotationAngle(const Eigen::Matrix3d& R) {
   return std::atan2(0.5 * w.norm(), 0.5 * (R.trace() - 1.0));
 }
 
-Eigen::Isometry3d umeyamaSe3(const std::vector<Eigen::Vector3d>& est,
-                             const std::vector<Eigen::Vector3d>& gt) {
+namespace {
+
+Eigen::Isometry3d umeyama(const std::vector<Eigen::Vector3d>& est,
+                          const std::vector<Eigen::Vector3d>& gt, bool with_scale,
+                          double& scale) {
   const std::size_t n = est.size();
   Eigen::Vector3d mu_e = Eigen::Vector3d::Zero(), mu_g = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < n; ++i) {
@@ -41,14 +44,33 @@ Eigen::Isometry3d umeyamaSe3(const std::vector<Eigen::Vector3d>& est,
   mu_e /= static_cast<double>(n);
   mu_g /= static_cast<double>(n);
   Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();  // cross-covariance gt x est
-  for (std::size_t i = 0; i < n; ++i) sigma += (gt[i] - mu_g) * (est[i] - mu_e).transpose();
+  double var_e = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    sigma += (gt[i] - mu_g) * (est[i] - mu_e).transpose();
+    var_e += (est[i] - mu_e).squaredNorm();
+  }
   Eigen::JacobiSVD<Eigen::Matrix3d> svd(sigma, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
   if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) S(2, 2) = -1;  // no reflection
+  scale = 1.0;
+  if (with_scale && var_e > 0) scale = (svd.singularValues().asDiagonal() * S).trace() / var_e;
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = svd.matrixU() * S * svd.matrixV().transpose();
-  T.translation() = mu_g - T.linear() * mu_e;
+  T.translation() = mu_g - scale * T.linear() * mu_e;
   return T;
+}
+
+}  // namespace
+
+Eigen::Isometry3d umeyamaSe3(const std::vector<Eigen::Vector3d>& est,
+                             const std::vector<Eigen::Vector3d>& gt) {
+  double scale = 1;
+  return umeyama(est, gt, false, scale);
+}
+
+Eigen::Isometry3d umeyamaSim3(const std::vector<Eigen::Vector3d>& est,
+                              const std::vector<Eigen::Vector3d>& gt, double& scale) {
+  return umeyama(est, gt, true, scale);
 }
 
 Result<TrajectoryMetrics> evaluateTrajectory(const std::vector<Eigen::Isometry3d>& gt,
@@ -115,15 +137,18 @@ Result<TrajectoryMetrics> evaluateTrajectory(const std::vector<Eigen::Isometry3d
 
   // Absolute errors, after alignment.
   std::vector<Eigen::Isometry3d> est_aligned(n), gt_ref(n);
-  if (params.align == TrajectoryAlignment::kSe3) {
+  if (params.align != TrajectoryAlignment::kNone) {
     std::vector<Eigen::Vector3d> pe(n), pg(n);
     for (std::size_t i = 0; i < n; ++i) {
       pe[i] = est[i].translation();
       pg[i] = gt[i].translation();
     }
-    const Eigen::Isometry3d T = umeyamaSe3(pe, pg);
+    const bool sim3 = params.align == TrajectoryAlignment::kSim3;
+    const Eigen::Isometry3d T = sim3 ? umeyamaSim3(pe, pg, m.align_scale) : umeyamaSe3(pe, pg);
     for (std::size_t i = 0; i < n; ++i) {
       est_aligned[i] = T * est[i];
+      // The scale applies to positions: s R p + t.
+      est_aligned[i].translation() = m.align_scale * (T.linear() * pe[i]) + T.translation();
       gt_ref[i] = gt[i];
     }
   } else {

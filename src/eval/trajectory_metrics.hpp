@@ -5,7 +5,8 @@
 // Inputs are associated pose pairs (gt[k], est[k]) of the same camera (T_world_cam: maps a point
 // in the camera frame into the trajectory's world frame, metres). Each trajectory may live in its
 // own world frame: drift and RPE use relative motions only; ATE and the final errors compare
-// positions after SE(3) alignment (Umeyama, no scale) or, with align = kNone, after expressing
+// positions after SE(3) alignment (Umeyama, no scale), after Sim(3) alignment (Umeyama with
+// scale: for an estimate up to scale, e.g. monocular) or, with align = kNone, after expressing
 // both trajectories relative to their first pose.
 #include <Eigen/Geometry>
 #include <vector>
@@ -14,7 +15,7 @@
 
 namespace svslam {
 
-enum class TrajectoryAlignment { kSe3, kNone };
+enum class TrajectoryAlignment { kSe3, kSim3, kNone };
 
 struct SegmentDrift {
   double length_m = 0;
@@ -34,6 +35,7 @@ struct TrajectoryMetrics {
   double final_pos_err_m = 0;
   double final_att_err_deg = 0;  // of the last pose relative to the first (alignment-free)
   double path_length_m = 0;  // ground truth
+  double align_scale = 1;    // the Sim(3) alignment's scale (1 for the other alignments)
 };
 
 struct TrajectoryEvalParams {
@@ -47,6 +49,12 @@ struct TrajectoryEvalParams {
 // Precondition: equal sizes >= 3, points not all collinear for a unique answer.
 Eigen::Isometry3d umeyamaSe3(const std::vector<Eigen::Vector3d>& est,
                              const std::vector<Eigen::Vector3d>& gt);
+
+// The similarity (s, T) minimising sum |gt_i - (s R est_i + t)|^2 (Umeyama 1991, eq. 40-42):
+// with U D V^T the SVD of the cross-covariance and S the reflection guard,
+// s = tr(D S) / var(est); T's translation is mu_gt - s R mu_est. Same precondition.
+Eigen::Isometry3d umeyamaSim3(const std::vector<Eigen::Vector3d>& est,
+                              const std::vector<Eigen::Vector3d>& gt, double& scale);
 
 // Rotation angle of R (a rotation matrix) in radians, in [0, pi].
 double rotationAngle(const Eigen::Matrix3d& R);

@@ -1,6 +1,7 @@
 #include "map/dem_map.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 
@@ -176,13 +177,11 @@ void DemMap::fillRaster(const DemTile& t, DemRaster& out) const {
   }
 }
 
-void DemMap::toRaster(DemRaster& out) const {
+Status DemMap::toRaster(DemRaster& out) const {
   out.cell_m = params_.cell_m;
-  if (tiles_.empty()) {
-    out.i0 = out.j0 = 0;
-    out.resize(0, 0);
-    return;
-  }
+  out.i0 = out.j0 = 0;
+  out.resize(0, 0);
+  if (tiles_.empty()) return Status::ok();
   int ti0 = std::numeric_limits<int>::max(), tj0 = ti0;
   int ti1 = std::numeric_limits<int>::min(), tj1 = ti1;
   for (const DemTile& t : tiles_) {
@@ -192,10 +191,22 @@ void DemMap::toRaster(DemRaster& out) const {
     tj1 = std::max(tj1, t.tj);
   }
   const int n = params_.tile_cells;
+  const double cols = (static_cast<double>(ti1) - ti0 + 1) * n;
+  const double rows = (static_cast<double>(tj1) - tj0 + 1) * n;
+  if (cols * rows > params_.max_raster_mcells * 1e6) {
+    char msg[256];
+    std::snprintf(msg, sizeof msg,
+                  "elevation map spans %.0f x %.0f cells (%.0f x %.0f m), more than "
+                  "map.max_raster_mcells = %d million: not written (diverged trajectory?)",
+                  cols, rows, cols * params_.cell_m, rows * params_.cell_m,
+                  params_.max_raster_mcells);
+    return Status::failedPrecondition(msg);
+  }
   out.i0 = ti0 * n;
   out.j0 = tj0 * n;
-  out.resize((ti1 - ti0 + 1) * n, (tj1 - tj0 + 1) * n);
+  out.resize(static_cast<int>(cols), static_cast<int>(rows));
   for (const DemTile& t : tiles_) fillRaster(t, out);
+  return Status::ok();
 }
 
 void DemMap::tileRaster(const DemTile& t, DemRaster& out) const {

@@ -105,8 +105,9 @@ class DemMap {
   int numTiles() const { return static_cast<int>(tiles_.size()); }
   std::size_t bytes() const;  // memory held by the cells (and their sources), bytes
 
-  // The whole map (bounding box of the tiles) as a north-up raster.
-  void toRaster(DemRaster& out) const;
+  // The whole map (bounding box of the tiles) as a north-up raster; outOfRange (out empty)
+  // when that box holds more than max_raster_mcells million cells.
+  Status toRaster(DemRaster& out) const;
   // One tile as an n x n raster.
   void tileRaster(const DemTile& tile, DemRaster& out) const;
   // Removes every tile (the map restarts empty; their memory is freed).

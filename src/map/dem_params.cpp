@@ -27,6 +27,8 @@ Status DemParams::validate() const {
   if (!(std::isfinite(min_sigma_m) && min_sigma_m >= 0.0))
     return bad("min_sigma_m", "must be finite and >= 0 m");
   if (max_tiles < 1) return bad("max_tiles", "must be >= 1");
+  if (max_raster_mcells < 1 || max_raster_mcells > 4096)
+    return bad("max_raster_mcells", "must be in [1, 4096]");
   return Status::ok();
 }
 

@@ -34,6 +34,9 @@ struct DemParams {
   // relief (window smoothing, the cell's own slope), m, >= 0.
   double min_sigma_m = 0.01;
   int max_tiles = 4096;  // bound on the tiles in memory (64 x 64 cells x 12 B = 48 KiB each)
+  // Bound on the cells of the map written as one raster (bounding box of the tiles, 13 B a
+  // cell), millions, [1, 4096]: a diverged trajectory spreads a few tiles over kilometres.
+  int max_raster_mcells = 64;
   // Keep, per cell, the latest fusion that wrote into it (DemTile::sources, 4 B more a cell),
   // so the map can be re-placed when past poses are corrected (dem_replacer.hpp). Not a config
   // key: `svslam run` sets it when loop closing is on.

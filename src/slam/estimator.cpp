@@ -33,6 +33,8 @@ std::unique_ptr<Estimator> makeEstimator(EstimatorKind kind, const SlamSystemPar
                                          const StereoOdometryParams& odometry,
                                          const StereoCalibration& calib) {
   if (kind == EstimatorKind::kVo) return std::make_unique<VoEstimator>(odometry, calib);
+  if (kind == EstimatorKind::kMono)
+    return std::make_unique<SlamSystem>(slam, odometry, calib, /*left_only=*/true);
   return std::make_unique<SlamSystem>(slam, odometry, calib);
 }
 

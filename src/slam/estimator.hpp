@@ -4,7 +4,9 @@
 //   vo   StereoOdometry: temporal matching + visual motion estimation chained frame to frame
 //        (slam/vo_estimator.hpp);
 //   ekf  SlamSystem: the same front end predicting an EKF over the pose and 3D landmarks
-//        (slam/slam_system.hpp).
+//        (slam/slam_system.hpp);
+//   mono SlamSystem from the left camera alone, bearing observations; the first pair's stereo
+//        points give the scale (slam_system.hpp, "Monocular mode").
 // Every estimator also returns the feedback the stereo stage of the next frame needs (the
 // predicted motion for clustered-feature ROI tracking).
 #include <memory>
@@ -22,7 +24,7 @@
 
 namespace svslam {
 
-enum class EstimatorKind { kEkf, kVo };
+enum class EstimatorKind { kEkf, kVo, kMono };
 
 struct SlamFrameResult {
   OdometryFrameResult odometry;  // front end + VME (T_first_cam there is pure odometry)

@@ -94,7 +94,8 @@ int SlamSystem::bestStereoPoint(ImageView<const std::uint8_t> left,
 }
 
 void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
-                                 ImageView<const std::uint8_t> right, SlamFrameResult& out) {
+                                 ImageView<const std::uint8_t> right, SlamFrameResult& out,
+                                 SearchPass pass, int already) {
   obs_.clear();
   bobs_.clear();
   obs_uv_.clear();
@@ -111,14 +112,27 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
     SearchPrediction pr;
     if (!predictLandmark(m, C, T_wc, P_pose, pr)) continue;
     pr.id = id;
-    pr.tracked = landmarks_.info(id).last_seen_frame == frame_ - 1;
+    const int last_seen = landmarks_.info(id).last_seen_frame;
+    pr.tracked = last_seen == frame_ - 1;
+    if (pass == SearchPass::kFirst && !pr.tracked) continue;
+    if (pass == SearchPass::kRest && last_seen == frame_) continue;  // observed (or restored)
     pr.order = static_cast<int>(preds.size());
     preds.push_back(pr);
-    ++out.predicted_visible;
+    if (pass != SearchPass::kRest) ++out.predicted_visible;
+  }
+  int max_obs = params_.max_observations - already;
+  if (pass == SearchPass::kFirst) {
+    // The best predicted first (the smallest windows: the least likely mismatched).
+    std::sort(preds.begin(), preds.end(),
+              [](const SearchPrediction& a, const SearchPrediction& c) {
+                const double sa = orderKey(a.sigma_px), sc = orderKey(c.sigma_px);
+                return sa != sc ? sa < sc : a.order < c.order;
+              });
   }
   // Order of the searches: re-perceptions first (the best predicted first, at most
   // max_reperceptions: they close loops), then the tracked landmarks, oldest first (they carry
   // the longest memory); at most max_observations observations per frame (bounded update cost).
+  if (pass != SearchPass::kFirst)
   std::sort(preds.begin(), preds.end(), [&](const SearchPrediction& a, const SearchPrediction& c) {
     if (a.tracked != c.tracked) return !a.tracked;
     if (!a.tracked) {
@@ -132,7 +146,7 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
   });
   int reperceptions = 0;
   for (const SearchPrediction& pr : preds) {
-    if (static_cast<int>(obs_uv_.size()) >= params_.max_observations) break;
+    if (static_cast<int>(obs_uv_.size()) >= max_obs) break;
     if (!pr.tracked && reperceptions >= params_.max_reperceptions) continue;
     if (!pr.tracked) ++reperceptions;
     const double tol = pr.tracked ? params_.track_tolerance_px : params_.reperception_tolerance_px;
@@ -193,10 +207,10 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
       u = static_cast<float>(u_ref);
       v = static_cast<float>(v_ref);
     }
-    const double err =
-        pr.tracked ? params_.track_matching_error_px : params_.reperception_matching_error_px;
     if (!stereo) {
       // Mono frame: the bearing, normalised image coordinates with the matching error.
+      const double err =
+          pr.tracked ? params_.mono_track_error_px : params_.mono_reperception_error_px;
       const double f = calib_.f_px, s_xy = err / f;
       bobs_.push_back({pr.id, Eigen::Vector2d((u - calib_.cx_px) / f, (v - calib_.cy_px) / f),
                        s_xy * s_xy * Eigen::Matrix2d::Identity()});
@@ -215,6 +229,8 @@ void SlamSystem::searchLandmarks(ImageView<const std::uint8_t> left,
       ++out.search_no_stereo;
       continue;
     }
+    const double err =
+        pr.tracked ? params_.track_matching_error_px : params_.reperception_matching_error_px;
     TrackPoint tp;
     tp.u_px = u;
     tp.v_px = v;

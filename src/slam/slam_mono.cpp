@@ -7,6 +7,7 @@
 #include "features/patch_similarity.hpp"
 #include "features/subpixel_refine.hpp"
 #include "slam/slam_system.hpp"
+#include "stereo/reprojection.hpp"
 
 namespace svslam {
 
@@ -36,8 +37,13 @@ bool insideWithMargin(ImageView<const std::uint8_t> img, double u, double v, int
 }  // namespace
 
 Status SlamSystem::predictConstantVelocity() {
-  return ekf_.predict(last_motion_,
-                      diagonalMotionCov(params_.mono_rot_sigma_rad, params_.mono_trans_sigma_m));
+  // Monocular mode's second frame: no velocity measured yet (the first frame's is zero).
+  if (left_only_ && frame_ == 1)
+    return ekf_.predict(last_motion_, diagonalMotionCov(params_.mono_start_rot_sigma_rad,
+                                                        params_.mono_start_trans_sigma_m));
+  const double trans_sigma_m = params_.mono_trans_sigma_m +
+                               params_.mono_trans_speed_fraction * last_motion_.translation().norm();
+  return ekf_.predict(last_motion_, diagonalMotionCov(params_.mono_rot_sigma_rad, trans_sigma_m));
 }
 
 Status SlamSystem::processMono(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,
@@ -51,7 +57,20 @@ Status SlamSystem::processMono(ImageView<const std::uint8_t> left, const StereoS
   } else {
     if (Status s = predictConstantVelocity(); !s) return s;
     restoreAnchors(left, out, &stereo.corner_px);
-    searchLandmarks(left, ImageView<const std::uint8_t>(), out);
+    // Monocular mode, active search: the tracked landmarks (best predicted first), an update,
+    // then the re-perceptions, predicted from the updated filter. Camera loss: one pass (on
+    // the synthetic camera-loss flights two passes ended 1.8-10x further off at seeds 1-3).
+    const ImageView<const std::uint8_t> none;
+    const bool two_pass = left_only_;
+    if (two_pass) searchLandmarks(left, none, out, SearchPass::kFirst);
+    int observed = 0;
+    if (two_pass && !bobs_.empty()) {
+      if (Status s = ekf_.updateBearings(bobs_, results_, &executor); !s) return s;
+      const int gated_before = out.gated;
+      applyObservations(out, true);
+      observed = static_cast<int>(bobs_.size()) - (out.gated - gated_before);
+    }
+    searchLandmarks(left, none, out, two_pass ? SearchPass::kRest : SearchPass::kAll, observed);
     if (!bobs_.empty()) {
       if (Status s = ekf_.updateBearings(bobs_, results_, &executor); !s) return s;
       applyObservations(out, true);
@@ -71,6 +90,52 @@ Status SlamSystem::processMono(ImageView<const std::uint8_t> left, const StereoS
   prev_mono_ = true;
   ++frame_;
   return Status::ok();
+}
+
+void SlamSystem::mapFirstPair(ImageView<const std::uint8_t> left, SlamFrameResult& out) {
+  const auto& pts = vo_.points();
+  const int h = params_.patch_half_px;
+  // The most precise stereo points first (ties: ascending index).
+  std::vector<int>& order = fresh_;
+  order.clear();
+  std::vector<double>& sigma = depth_scratch_;
+  sigma.assign(pts.size(), 0.0);
+  for (std::size_t j = 0; j < pts.size(); ++j) {
+    sigma[j] = std::sqrt(pts[j].cov.trace());
+    const int x = static_cast<int>(std::lround(pts[j].u_px));
+    const int y = static_cast<int>(std::lround(pts[j].v_px));
+    if (std::isfinite(sigma[j]) && sigma[j] <= params_.candidate_max_sigma_m &&
+        patchInside(left, x, y, h + 1))
+      order.push_back(static_cast<int>(j));
+  }
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    const double sa = sigma[static_cast<std::size_t>(a)], sb = sigma[static_cast<std::size_t>(b)];
+    return sa != sb ? sa < sb : a < b;
+  });
+  std::fill(cell_count_.begin(), cell_count_.end(), 0);
+  const float min_d2 = static_cast<float>(4 * h * h);
+  for (const int j : order) {
+    const TrackPoint& p = pts[static_cast<std::size_t>(j)];
+    const std::size_t cell = gridCell(p.u_px, p.v_px);
+    if (cell_count_[cell] >= params_.max_per_cell) continue;
+    const float x = std::round(p.u_px), y = std::round(p.v_px);
+    bool crowded = false;  // two landmarks closer than 2 h px would share their patch
+    for (const Eigen::Vector2f& l : landmark_uv_)
+      crowded = crowded || (l - Eigen::Vector2f(x, y)).squaredNorm() < min_d2;
+    if (crowded) continue;
+    if (ekf_.numLandmarks() >= params_.ekf.max_landmarks) break;
+    const StereoPoint sp =
+        reprojectPixel(calib_, x, y, p.d_px, p.sigma_d_px, params_.init_sigma_uv_px);
+    auto id = ekf_.addLandmarkFromExactPose(anchor_pose_, sp.p_cam, sp.cov);
+    if (!id) continue;
+    landmarks_.add(*id, frame_, left, static_cast<int>(x), static_cast<int>(y), anchor_pose_,
+                   sp.p_cam);
+    landmarks_.info(*id).anchored = true;
+    anchored_ids_.push_back(*id);
+    landmark_uv_.emplace_back(x, y);
+    ++cell_count_[cell];
+    ++out.added;
+  }
 }
 
 void SlamSystem::trackMonoCandidates(ImageView<const std::uint8_t> left, SlamFrameResult& out) {

@@ -39,14 +39,28 @@ struct SlamSystemParams {
   // velocity, with these sigmas per frame), and the bearing-only initialisation of new
   // landmarks from tracked left-image corners.
   RightCameraParams right_camera;
-  double mono_rot_sigma_rad = 0.01;  // per frame, rad, > 0
-  double mono_trans_sigma_m = 0.2;   // per frame, m, > 0
+  // Constant-velocity prediction of a mono frame, per frame: rotation sigma (rad, > 0);
+  // translation sigma mono_trans_sigma_m + mono_trans_speed_fraction |t_last| (m, >= 0 each,
+  // sum > 0): a change of velocity within a frame is a fraction of the speed, plus a floor. The
+  // defaults suit the rendered flights (config/mono_real_camera.yaml: real cameras).
+  double mono_rot_sigma_rad = 0.01;
+  double mono_trans_sigma_m = 0.2;
+  double mono_trans_speed_fraction = 0.0;
+  // Monocular mode's second frame, whose velocity nothing measured yet: rad, m, > 0.
+  double mono_start_rot_sigma_rad = 0.05;
+  double mono_start_trans_sigma_m = 1.0;
   BearingInitParams bearing_init;    // seed 003's initialisation (r_min_m, r_max_m, samples)
   int mono_max_candidates = 64;      // left corners tracked toward initialisation, [0, 4096]
   int mono_candidate_min_frames = 3;  // frames a corner is tracked before it may be initialised
   int mono_candidate_max_frames = 30;  // dropped when not initialised by then, >= min
   double mono_bearing_sigma_px = 1.0;  // angular error of a candidate's bearings, px, > 0
   double mono_search_px = 20.0;        // search radius of a candidate around its prediction, px
+  // Matching errors of a bearing observation (px, > 0): tracked from the previous frame and
+  // re-perceived. The defaults are the stereo frame's (rendered images); on real images no
+  // right image checks the match and the whole pixel error goes into the bearing
+  // (config/mono_real_camera.yaml doubles them).
+  double mono_track_error_px = 0.5;
+  double mono_reperception_error_px = 1.0;
   int map_reserve = 4096;  // landmarks held at once (in the state, anchored, or in the retired
                            // map) whose storage is preallocated (about 0.7 kB each),
                            // >= ekf.max_landmarks; beyond it the storage grows by doubling

@@ -45,8 +45,18 @@ Status SlamSystemParams::validate() const {
     return Status::invalidArgument("slam.bearing_* (" + s.message() + ")");
   if (Status s = right_camera.validate(); !s)
     return Status::invalidArgument("slam.right_camera_* (" + s.message() + ")");
-  if (!(mono_rot_sigma_rad > 0.0) || !(mono_trans_sigma_m > 0.0))
-    return Status::invalidArgument("slam.mono_rot_sigma_rad and mono_trans_sigma_m must be > 0");
+  if (!(mono_rot_sigma_rad > 0.0) || !(mono_trans_sigma_m >= 0.0) ||
+      !(mono_trans_speed_fraction >= 0.0) ||
+      !(mono_trans_sigma_m + mono_trans_speed_fraction > 0.0))
+    return Status::invalidArgument(
+        "slam.mono_rot_sigma_rad must be > 0, slam.mono_trans_sigma_m and "
+        "slam.mono_trans_speed_fraction >= 0 and not both 0");
+  if (!(mono_start_rot_sigma_rad > 0.0) || !(mono_start_trans_sigma_m > 0.0))
+    return Status::invalidArgument(
+        "slam.mono_start_rot_sigma_rad and slam.mono_start_trans_sigma_m must be > 0");
+  if (!(mono_track_error_px > 0.0) || !(mono_reperception_error_px > 0.0))
+    return Status::invalidArgument(
+        "slam.mono_track_error_px and slam.mono_reperception_error_px must be > 0");
   if (mono_max_candidates < 0 || mono_max_candidates > 4096)
     return Status::invalidArgument("slam.mono_max_candidates must be in [0, 4096]");
   if (mono_candidate_min_frames < 2 || mono_candidate_max_frames < mono_candidate_min_frames)
@@ -60,7 +70,7 @@ Status SlamSystemParams::validate() const {
 }
 
 SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParams& odometry,
-                       const StereoCalibration& calib)
+                       const StereoCalibration& calib, bool left_only)
     : params_(params),
       calib_(calib),
       vo_(odometry, calib),
@@ -68,7 +78,8 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
       landmarks_(params.patch_half_px, params.map_reserve, params.map_voxel_m),
       landmark_row_matcher_(odometry.stereo_match),
       right_monitor_(params.right_camera),
-      bearing_init_(params.bearing_init) {
+      bearing_init_(params.bearing_init),
+      left_only_(left_only) {
   init_status_ = params.validate();
   if (init_status_) init_status_ = vo_.initStatus();
   if (init_status_) init_status_ = ekf_.initStatus();
@@ -139,6 +150,32 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
                            Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;
   out = SlamFrameResult{};
+  if (left_only_) {
+    if (frame_ > 0) {
+      if (Status s = processMono(left, stereo, out, executor); !s) return s;
+      if (observer) observer->stageDone("ekf");
+      return Status::ok();
+    }
+    // The first pair: the scale source.
+    if (Status s = vo_.frontEnd(left, stereo, out.odometry, observer); !s) return s;
+    calib_.disparity_offset_px = vo_.calibration().disparity_offset_px;
+    if (Status s = startMap(); !s) return s;
+    landmark_uv_.clear();
+    mapFirstPair(left, out);
+    spawnMonoCandidates(left, stereo);
+    for (const MonoCandidate& c : mono_cands_) out.mono_candidates += c.alive ? 1 : 0;
+    if (observer) observer->stageDone("ekf");
+    out.mono = true;
+    out.T_world_cam = ekf_.pose();
+    out.pose_cov = ekf_.poseCovariance();
+    out.landmarks_in_state = ekf_.numLandmarks();
+    out.landmarks_in_map = landmarks_.size();
+    prev_landmark_uv_.swap(landmark_uv_);
+    prev_pose_ = ekf_.pose();
+    prev_mono_ = true;
+    ++frame_;
+    return Status::ok();
+  }
   const bool stereo_ok = right_monitor_.process(left, right);
   out.right_camera = static_cast<int>(right_monitor_.state());
   if (!stereo_ok) {

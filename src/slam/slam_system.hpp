@@ -50,9 +50,13 @@
 // Camera loss (seed 000 part 2, seed 003): a RightCameraMonitor classifies each right image
 // (missing, flat, frozen). While it is unusable the frame is processed from the left image
 // alone: the stereo stage's points are not used; the prediction is the filter's last motion
-// (constant velocity) with mono_rot_sigma_rad / mono_trans_sigma_m; the landmarks of the state
+// (constant velocity) with mono_rot_sigma_rad and mono_trans_sigma_m + mono_trans_speed_fraction
+// times the last translation (monocular mode's second frame, with no velocity yet:
+// mono_start_rot_sigma_rad, mono_start_trans_sigma_m); the landmarks of the state
 // are searched as in step 3 and observed by their bearing (EkfSlam::updateBearings, the same
-// matching errors); left corners (the stereo stage's detections, strongest first, in grid cells
+// matching errors mono_track_error_px, mono_reperception_error_px) in two passes (active
+// search): the landmarks tracked in the previous frame, best predicted first, an update, then
+// the re-perceptions, predicted from the updated filter (smaller windows); left corners (the stereo stage's detections, strongest first, in grid cells
 // short of landmarks) are tracked by ZNCC from frame to frame (their template follows them)
 // and, once tracked over mono_candidate_min_frames with a parallax between their first and
 // current bearing that BearingInitializer accepts, initialised from those two views (seed
@@ -61,6 +65,11 @@
 // pose). The metric scale is held by the landmarks already mapped. When the right image is
 // usable again (after right_camera.resume_frames good frames) stereo resumes; its first frame
 // is predicted like a mono frame (the odometry's previous frame is stale).
+// Monocular mode (`--mode mono`, left_only): the whole flight from the left camera. The first
+// pair is the scale source (the only use of the right image): its stereo points, the most
+// precise first and at most max_per_cell per grid cell, are initialised at once from the exact
+// first pose (EkfSlam::addLandmarkFromExactPose, anchored like step 4's), and every later frame
+// is a mono frame as above (the right image is not looked at).
 // Memory: every per-frame buffer is a member sized in the constructor (or grown once to the
 // frame's stereo point count); the map's bookkeeping is preallocated for map_reserve landmarks.
 // Once warm, a frame allocates nothing while the map holds fewer than map_reserve landmarks
@@ -89,8 +98,9 @@ namespace svslam {
 
 class SlamSystem final : public Estimator {
  public:
+  // left_only: monocular mode (above); otherwise stereo with the camera-loss fallback.
   SlamSystem(const SlamSystemParams& params, const StereoOdometryParams& odometry,
-             const StereoCalibration& calib);
+             const StereoCalibration& calib, bool left_only = false);
   const Status& initStatus() const override { return init_status_; }
   EstimatorOutputs outputs() const override { return {true, true}; }
 
@@ -99,7 +109,11 @@ class SlamSystem final : public Estimator {
   Status process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                  const StereoStageOutput& stereo, SlamFrameResult& out, Executor& executor,
                  StageObserver* observer = nullptr) override;
-  TrackingFeedback feedback() const override { return vo_.feedback(); }
+  // After a mono frame the odometry's previous frame is stale: no prediction (the stereo stage
+  // then detects over the whole image, no ROI from a stale motion).
+  TrackingFeedback feedback() const override {
+    return prev_mono_ ? TrackingFeedback{} : vo_.feedback();
+  }
 
   // Every landmark ever initialised: in the state (current estimate) or retired.
   std::vector<MapLandmark> map() const override;
@@ -118,9 +132,14 @@ class SlamSystem final : public Estimator {
   bool nearLandmark(const std::vector<Eigen::Vector2f>& landmarks_uv, float u, float v) const;
   void passTracks();
   // Searches the landmarks of the state in the current pair; fills obs_ / obs_uv_ (stereo) or,
-  // when `right` is empty (mono frame), bobs_ / obs_uv_ with bearings.
+  // when `right` is empty (mono frame), bobs_ / obs_uv_ with bearings. `pass` (mono frames'
+  // active search): kAll searches as step 3 says; kFirst only the tracked landmarks, the best
+  // predicted first; kRest the landmarks not yet observed this frame, as kAll, up to
+  // max_observations - `already` observations.
+  enum class SearchPass { kAll, kFirst, kRest };
   void searchLandmarks(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                       SlamFrameResult& out);
+                       SlamFrameResult& out, SearchPass pass = SearchPass::kAll,
+                       int already = 0);
   // A frame without the right image (camera loss); slam_mono.cpp.
   Status processMono(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,
                      SlamFrameResult& out, Executor& executor);
@@ -128,6 +147,9 @@ class SlamSystem final : public Estimator {
   Status predictConstantVelocity();
   // Frame 0: the filter at the world origin with an exact pose, no anchor yet.
   Status startMap();
+  // Monocular mode, frame 0: the map from the first pair's stereo points (vo_.points(), after
+  // the front end), anchored at the exact first pose; fills out.added.
+  void mapFirstPair(ImageView<const std::uint8_t> left, SlamFrameResult& out);
   // diag(rot^2 I3, trans^2 I3), [dtheta (rad), dt (m)]: the motion covariance of a predicted
   // (not measured) frame.
   static Matrix6d diagonalMotionCov(double rot_sigma_rad, double trans_sigma_m);
@@ -230,6 +252,7 @@ class SlamSystem final : public Estimator {
   std::uint64_t mono_serial_ = 0;
   std::vector<double> depth_scratch_;
   std::vector<BearingView<3>> bearing_views_;
+  bool left_only_ = false;
   bool prev_mono_ = false;
   Eigen::Isometry3d prev_pose_ = Eigen::Isometry3d::Identity();    // filter pose, last frame
   Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();  // T_cur_prev of the filter

@@ -41,6 +41,51 @@ TEST(TrajectoryMetrics, UmeyamaRecoversRigidTransform) {
   EXPECT_TRUE(R.matrix().isApprox(T.matrix(), 1e-9));
 }
 
+TEST(TrajectoryMetrics, UmeyamaSim3RecoversSimilarity) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0, 5);
+  std::vector<Eigen::Vector3d> a, b;
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(-1.1, Eigen::Vector3d(3, -1, 2).normalized()).toRotationMatrix();
+  const Eigen::Vector3d t(-3, 7, 1);
+  const double s = 2.5;
+  for (int i = 0; i < 50; ++i) {
+    a.emplace_back(n(rng), n(rng), n(rng));
+    b.push_back(s * (R * a.back()) + t);
+  }
+  double scale = 0;
+  const Eigen::Isometry3d T = umeyamaSim3(a, b, scale);
+  EXPECT_NEAR(scale, s, 1e-9);
+  EXPECT_TRUE(T.linear().isApprox(R, 1e-9));
+  EXPECT_TRUE(T.translation().isApprox(t, 1e-9));
+}
+
+// An estimate at 0.6 of the true scale (monocular): after Sim(3) it scores zero, after SE(3)
+// it does not.
+TEST(TrajectoryMetrics, Sim3AlignmentRemovesAGlobalScale) {
+  const auto gt = path(60, 0.02);
+  std::vector<Eigen::Isometry3d> est;
+  Eigen::Isometry3d W = Eigen::Isometry3d::Identity();
+  W.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  W.translation() = Eigen::Vector3d(1, 2, 3);
+  for (const auto& g : gt) {
+    Eigen::Isometry3d e = g;
+    e.translation() *= 0.6;
+    est.push_back(W * e);
+  }
+  TrajectoryEvalParams p;
+  p.segment_lengths_m = {10};
+  p.align = TrajectoryAlignment::kSim3;
+  auto m = evaluateTrajectory(gt, est, p);
+  ASSERT_TRUE(m.isOk());
+  EXPECT_NEAR(m->ate_rmse_m, 0.0, 1e-9);
+  EXPECT_NEAR(m->align_scale, 1.0 / 0.6, 1e-9);
+  p.align = TrajectoryAlignment::kSe3;
+  auto r = evaluateTrajectory(gt, est, p);
+  ASSERT_TRUE(r.isOk());
+  EXPECT_GT(r->ate_rmse_m, 1.0);
+  EXPECT_EQ(r->align_scale, 1.0);
+}
+
 TEST(TrajectoryMetrics, PerfectEstimateInAnotherFrameScoresZero) {
   const auto gt = path(200, 0.01);
   Eigen::Isometry3d W = Eigen::Isometry3d::Identity();

@@ -79,7 +79,7 @@ TEST(DemFuser, LevelPlaneHeightsAndHonestSigmas) {
     EXPECT_EQ(st.points_fused, kW * kH);
   }
   DemRaster r;
-  map.toRaster(r);
+  ASSERT_TRUE(map.toRaster(r));
   int cells = 0, within = 0;
   double sum_abs = 0.0;
   for (std::size_t k = 0; k < r.height_m.size(); ++k) {
@@ -205,7 +205,7 @@ TEST(DemFuser, NanDisparitiesNeverReachTheGrid) {
   EXPECT_EQ(st.points_not_finite, 2 * kW);
   EXPECT_EQ(st.points_fused, kW * (kH - 2));
   DemRaster r;
-  map.toRaster(r);
+  ASSERT_TRUE(map.toRaster(r));
   for (std::size_t k = 0; k < r.height_m.size(); ++k) {
     if (r.count[k] > 0) {
       ASSERT_TRUE(std::isfinite(r.height_m[k]) && std::isfinite(r.sigma_m[k]));

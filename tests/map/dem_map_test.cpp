@@ -100,7 +100,7 @@ TEST(DemMap, RasterIsNorthUpWithNanWhereEmpty) {
   ASSERT_TRUE(map.fuse(-1, -1, measurement(3.0, 0.1, 1, 200), 0, 0));
   ASSERT_TRUE(map.fuse(8, 9, measurement(-2.0, 0.1, 1, 50), 0, 0));
   DemRaster r;
-  map.toRaster(r);
+  ASSERT_TRUE(map.toRaster(r));
   EXPECT_EQ(r.i0, -8);
   EXPECT_EQ(r.j0, -8);
   EXPECT_EQ(r.cols, 24);
@@ -115,6 +115,27 @@ TEST(DemMap, RasterIsNorthUpWithNanWhereEmpty) {
   EXPECT_FLOAT_EQ(r.height_m[r.index(col, row)], -2.0f);
   EXPECT_TRUE(std::isnan(r.height_m[r.index(0, 0)]));
   EXPECT_EQ(r.count[r.index(0, 0)], 0.0f);
+}
+
+// A diverged trajectory leaves a few tiles kilometres apart: their bounding box is not
+// allocated, the error names the bound.
+TEST(DemMap, RasterLargerThanTheBoundIsRefusedWithoutAllocating) {
+  DemParams p;
+  p.tile_cells = 64;
+  p.max_raster_mcells = 1;
+  DemMap map(p);
+  ASSERT_TRUE(map.fuse(0, 0, measurement(1.0, 0.1, 1, 100), 0, 0));
+  ASSERT_TRUE(map.fuse(64 * 15, 64 * 15, measurement(1.0, 0.1, 1, 100), 0, 0));  // 1024^2 cells
+  DemRaster r;
+  const Status s = map.toRaster(r);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.message().find("max_raster_mcells"), std::string::npos) << s.message();
+  EXPECT_EQ(r.cols * r.rows, 0);
+  DemMap small(p);  // 15 x 15 tiles = 921 600 cells: within the bound
+  ASSERT_TRUE(small.fuse(0, 0, measurement(1.0, 0.1, 1, 100), 0, 0));
+  ASSERT_TRUE(small.fuse(64 * 14, 64 * 14, measurement(1.0, 0.1, 1, 100), 0, 0));
+  EXPECT_TRUE(small.toRaster(r));
+  EXPECT_EQ(r.cols, 960);
 }
 
 }  // namespace

@@ -98,6 +98,23 @@ TEST_F(Run, RightCameraLossIsFlownOnAndReported) {
   for (const auto& T : t->poses) EXPECT_TRUE(T.matrix().allFinite());
 }
 
+TEST_F(Run, MonoModeRunsFromTheLeftCameraAndSaysSo) {
+  ASSERT_EQ(run("--mode mono --source synthetic:width=320,height=240,frames=12 --out " +
+                path("m")),
+            0);
+  const std::string stats = slurp(path("m/stats.json"));
+  for (const char* key : {"\"mode\": \"mono\"", "\"frames_without_pose\": 0",
+                          "\"frames_monocular\": 12"})
+    EXPECT_NE(stats.find(key), std::string::npos) << key << " missing in " << stats;
+  auto t = svslam::drivers::readTrajectory(path("m/trajectory_kitti.txt"));
+  ASSERT_TRUE(t.isOk());
+  ASSERT_EQ(t->poses.size(), 12u);
+  for (const auto& T : t->poses) EXPECT_TRUE(T.matrix().allFinite());
+  std::string err;
+  EXPECT_NE(run("--mode stereo --out " + path("o"), &err), 0);
+  EXPECT_NE(err.find("mono"), std::string::npos) << err;  // the list of modes
+}
+
 TEST_F(Run, BadInputGivesAClearErrorAndNonZeroExit) {
   std::string err;
   EXPECT_NE(run("--source nowhere:x --out " + path("o"), &err), 0);

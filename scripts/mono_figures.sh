@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Monocular mode (svslam run --mode mono): the rendered blimp flight at 1024 x 768 (the issue's)
+# and euroc_mh01_first320 from cam0 (the first stereo pair gives the scale), ATE after Sim(3)
+# alignment, with the default configuration and with config/mono_real_camera.yaml.
+#   scripts/mono_figures.sh [OUT_DIR]          (about 4 minutes on 2 cores)
+# EuRoC lines are skipped when ../shared/data/euroc_mh01_first320 is absent.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=./build/pipeline/svslam
+[ -x "$bin" ] || { echo "build first: $bin missing" >&2; exit 1; }
+out=${1:-$(mktemp -d)}
+mkdir -p "$out"
+score() {  # score NAME GT EST [extra eval args]
+  local name=$1 gt=$2 dir=$3; shift 3
+  local j
+  j=$("$bin" eval-trajectory --gt "$gt" --est "$dir/$est_file" --align sim3 \
+        --cov "$dir/pose_covariance.txt" --segments 10 "$@")
+  echo "$name: $(echo "$j" | grep -oE '"(path_length_m|ate_rmse_m|align_scale|final_att_err_deg|mean_nees|position_within_2sigma_pct)": [-0-9.e]+' | tr '\n' ' ')"
+  grep -oE '"(frames_without_pose|frames_monocular|landmarks_added_from_bearings|ekf_median_ms)": [0-9.]+' "$dir/stats.json" | tr '\n' ' '
+  echo
+}
+est_file=trajectory_kitti.txt
+"$bin" run --mode mono --sequential --out "$out/synthetic" > /dev/null
+score "synthetic 1024x768, defaults" "$out/synthetic/groundtruth_kitti.txt" "$out/synthetic"
+data=../shared/data/euroc_mh01_first320
+if [ ! -d "$data" ]; then
+  echo "skip: $data absent" >&2
+  exit 0
+fi
+est_file=trajectory_tum.txt
+for cfg in default real; do
+  args=()
+  [ "$cfg" = real ] && args=(--config config/mono_real_camera.yaml)
+  "$bin" run --mode mono --sequential "${args[@]}" --source "euroc:$data" --out "$out/euroc_$cfg" > /dev/null
+  score "euroc_mh01_first320 cam0, $cfg" "$data/groundtruth_per_frame_cam0_times.txt" \
+    "$out/euroc_$cfg" --body-to-cam "$data/mav0/cam0/sensor.yaml"
+done
