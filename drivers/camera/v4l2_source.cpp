@@ -88,6 +88,20 @@ Status StereoRectification::apply(const ImageU8& raw_left, const ImageU8& raw_ri
   return Status::ok();
 }
 
+Status StereoRectification::applyLeft(const ImageU8& raw_left, StereoFrame& out) const {
+  if (raw_left.width() != calib.width || raw_left.height() != calib.height)
+    return Status::invalidArgument("rectification: raw view is " +
+                                   std::to_string(raw_left.width()) + "x" +
+                                   std::to_string(raw_left.height()) +
+                                   ", calibration is for " + std::to_string(calib.width) + "x" +
+                                   std::to_string(calib.height));
+  out.left.resize(calib.width, calib.height);
+  out.right.resize(0, 0);
+  cv::Mat l = asMat(out.left);
+  cv::remap(asMat(raw_left), l, map_left_x, map_left_y, cv::INTER_LINEAR);
+  return Status::ok();
+}
+
 Result<StereoRectification> loadStereoRectification(const std::string& file, int width,
                                                     int height) {
   auto c = readStereoCalibrationFile(file);
@@ -249,7 +263,48 @@ Result<bool> V4l2StereoSource::reconnect(const Status& unplugged) {
   }
 }
 
+void V4l2StereoSource::loseRight(const Status& unplugged) {
+  (void)captures_[1]->stop();
+  right_lost_ = true;
+  ++right_losses_;
+  right_lost_since_ns_ = clock_->nowNs();
+  next_right_attempt_ns_ = right_lost_since_ns_ + options_.reconnect.interval_ms * kNsPerMs;
+  warn(unplugged.message() + ": going on with the left camera alone (reopening the right one "
+       "every " + std::to_string(options_.reconnect.interval_ms) + " ms)");
+}
+
+Result<bool> V4l2StereoSource::nextLeftOnly(StereoFrame& out) {
+  const TimeNs now = clock_->nowNs();
+  if (now >= next_right_attempt_ns_) {
+    if (captures_[1]->open()) {
+      right_lost_ = false;
+      pairer_.reset();
+      frozen_.reset();
+      warn("right camera back: " + captures_[1]->params().device + " after " +
+           std::to_string((now - right_lost_since_ns_) / kNsPerMs) + " ms");
+      return next(out);
+    }
+    (void)captures_[1]->stop();
+    next_right_attempt_ns_ = now + options_.reconnect.interval_ms * kNsPerMs;
+  }
+  TimeNs t_ns = 0;
+  std::uint32_t seq = 0;
+  auto r = captures_[0]->grab(raw_left_, t_ns, seq);
+  if (r) {
+    if (!*r) return r;
+    ++left_only_frames_;
+    return deliver(t_ns, true, out);
+  }
+  if (!captures_[0]->unplugged() || options_.reconnect.timeout_s <= 0.0) return r;
+  // The left camera gone too: both are reopened together.
+  right_lost_ = false;
+  auto back = reconnect(r.status());
+  if (!back || !*back) return back;
+  return next(out);
+}
+
 Result<bool> V4l2StereoSource::next(StereoFrame& out) {
+  if (right_lost_) return nextLeftOnly(out);
   TimeNs t_ns = 0;
   for (;;) {
     auto r = grabRaw(t_ns);
@@ -257,18 +312,34 @@ Result<bool> V4l2StereoSource::next(StereoFrame& out) {
       if (!*r) return r;
       break;
     }
+    if (options_.right_loss_left_only && captures_.size() == 2 && captures_[1]->unplugged() &&
+        !captures_[0]->unplugged()) {
+      loseRight(r.status());
+      // The left frame that was waiting for its partner is the first one flown alone.
+      const bool have_left = pairer_.takeHead(0, raw_left_, t_ns);
+      pairer_.reset();
+      if (have_left) {
+        ++left_only_frames_;
+        return deliver(t_ns, true, out);
+      }
+      return nextLeftOnly(out);
+    }
     const bool unplugged = std::any_of(captures_.begin(), captures_.end(),
                                        [](const auto& c) { return c->unplugged(); });
     if (!unplugged || options_.reconnect.timeout_s <= 0.0) return r;
     auto back = reconnect(r.status());
     if (!back || !*back) return back;
   }
+  return deliver(t_ns, false, out);
+}
+
+Result<bool> V4l2StereoSource::deliver(TimeNs t_ns, bool left_only, StereoFrame& out) {
   std::string warning;
   if (captures_.size() == 1) {
     if (Status s = frozen_.check(0, full_.cview(), warning); !s) return s;
     if (Status s = splitSideBySide(full_, raw_left_, raw_right_); !s) return s;
   } else {
-    for (int c = 0; c < 2; ++c)
+    for (int c = 0; c < (left_only ? 1 : 2); ++c)
       if (Status s = frozen_.check(c, (c == 0 ? raw_left_ : raw_right_).cview(), warning); !s)
         return s;
   }
@@ -282,7 +353,9 @@ Result<bool> V4l2StereoSource::next(StereoFrame& out) {
   reconnected_ = false;
   have_last_t_ = true;
   last_t_ns_ = t_ns;
-  if (Status s = rect_.apply(raw_left_, raw_right_, out); !s) return s;
+  if (Status s = left_only ? rect_.applyLeft(raw_left_, out) : rect_.apply(raw_left_, raw_right_, out);
+      !s)
+    return s;
   out.index = index_++;
   out.t_ns = t_ns;
   return true;
@@ -296,6 +369,10 @@ std::vector<std::pair<std::string, std::int64_t>> V4l2StereoSource::counters() c
   add("reconnects", reconnects_);
   add("reconnect_frames_lost", frames_lost_);
   add("reconnect_wait_ms", static_cast<std::uint64_t>(reconnect_wait_ns_ / kNsPerMs));
+  if (options_.right_loss_left_only) {
+    add("right_losses", right_losses_);
+    add("left_only_frames", left_only_frames_);
+  }
   for (std::size_t i = 0; i < captures_.size(); ++i) {
     const std::string p = captures_.size() == 1 ? "sbs_" : (i == 0 ? "left_" : "right_");
     const V4l2CaptureStats& st = captures_[i]->stats();
@@ -332,7 +409,8 @@ Result<V4l2Setup> parseV4l2Setup(const std::string& spec_after_prefix) {
   auto spec = parseCameraSpec(spec_after_prefix, "v4l2",
                               {"width", "height", "fps", "format", "calib", "sync_ms", "layout",
                                "buffers", "timeout_ms", "max_bad_buffers", "reconnect_timeout_s",
-                               "reconnect_interval_ms", "frozen_frames", "frozen_action"});
+                               "reconnect_interval_ms", "frozen_frames", "frozen_action",
+                               "right_loss"});
   if (!spec) return spec.status();
   V4l2CaptureParams p;
   ReconnectParams rp;
@@ -362,6 +440,10 @@ Result<V4l2Setup> parseV4l2Setup(const std::string& spec_after_prefix) {
     return Status::invalidArgument("v4l2: option max_bad_buffers must be in [0, 10000], got " +
                                    spec->options.at("max_bad_buffers"));
   const auto& opt = spec->options;
+  const std::string right_loss = opt.count("right_loss") ? opt.at("right_loss") : "reconnect";
+  if (right_loss != "reconnect" && right_loss != "left_only")
+    return Status::invalidArgument(
+        "v4l2: option right_loss must be 'reconnect' or 'left_only', got '" + right_loss + "'");
   const std::string layout = opt.count("layout") ? opt.at("layout") : "stereo";
   if (layout != "stereo" && layout != "side-by-side")
     return Status::invalidArgument("v4l2: layout must be 'stereo' or 'side-by-side', got '" +
@@ -398,6 +480,11 @@ Result<V4l2Setup> parseV4l2Setup(const std::string& spec_after_prefix) {
       static_cast<TimeNs>(std::llround(*sync_ms * static_cast<double>(kNsPerMs)));
   setup.reconnect.timeout_s = *rec_timeout;
   setup.reconnect.interval_ms = *rec_interval;
+  if (sbs && right_loss == "left_only")
+    return Status::invalidArgument(
+        "v4l2: right_loss=left_only needs two cameras (layout=stereo): a side-by-side device "
+        "loses both views at once");
+  setup.right_loss_left_only = right_loss == "left_only";
   setup.frozen = *frozen;
   if (opt.count("calib")) setup.calib = opt.at("calib");
   return setup;
@@ -430,6 +517,7 @@ Result<std::unique_ptr<StereoSource>> openV4l2Source(const std::string& spec_aft
   V4l2SourceOptions o;
   o.sync_tolerance_ns = setup->sync_tolerance_ns;
   o.reconnect = setup->reconnect;
+  o.right_loss_left_only = setup->right_loss_left_only;
   o.frozen = setup->frozen;
   o.stop = stop;
   o.clock = clock;

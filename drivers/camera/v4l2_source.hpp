@@ -65,6 +65,8 @@ struct StereoRectification {
   cv::Mat map_left_x, map_left_y, map_right_x, map_right_y;
   // Remaps raw views (calib.width x calib.height) into out.left / out.right.
   Status apply(const ImageU8& raw_left, const ImageU8& raw_right, StereoFrame& out) const;
+  // The left view alone (the right camera lost): out.right is left empty (0 x 0).
+  Status applyLeft(const ImageU8& raw_left, StereoFrame& out) const;
 };
 // Reads `file` (format above); width/height = the capture size of one view, px.
 Result<StereoRectification> loadStereoRectification(const std::string& file, int width, int height);
@@ -81,6 +83,16 @@ class TimestampPairer {
   Result<bool> next(const GrabFn& grab, ImageU8& left, ImageU8& right, TimeNs& t_ns);
   // Forgets the frames waiting for a partner (the cameras restarted); counts stay.
   void reset() { have_ = {false, false}; }
+  // Moves out the frame of `camera` waiting for a partner (false when none), which is then no
+  // longer waiting.
+  bool takeHead(int camera, ImageU8& image, TimeNs& t_ns) {
+    const auto i = static_cast<std::size_t>(camera);
+    if (!have_[i]) return false;
+    std::swap(image, head_[i]);
+    t_ns = head_t_[i];
+    have_[i] = false;
+    return true;
+  }
   std::uint64_t dropped(int camera) const { return dropped_[static_cast<std::size_t>(camera)]; }
 
  private:
@@ -102,6 +114,12 @@ struct ReconnectParams {
 struct V4l2SourceOptions {
   TimeNs sync_tolerance_ns = 5 * kNsPerMs;
   ReconnectParams reconnect;
+  // Spec option right_loss=left_only (two cameras): when the right camera is unplugged the
+  // source goes on with the left one, delivering frames whose right view is empty, and tries to
+  // reopen the right one every reconnect.interval_ms between frames (never waiting for it);
+  // when it is back, pairs resume. Default (right_loss=reconnect): both cameras stop and are
+  // reopened together, as for a left unplug.
+  bool right_loss_left_only = false;
   FrozenCameraParams frozen;
   StopQuery stop;                   // polled while waiting to reconnect; empty = never stop
   ReconnectClock* clock = nullptr;  // nullptr = systemReconnectClock(); must outlive the source
@@ -116,9 +134,10 @@ class V4l2StereoSource final : public StereoSource {
   int size() const override { return -1; }
   Result<bool> next(StereoFrame& out) override;
   std::string takeWarnings() override;
-  // reconnects, reconnect_frames_lost, reconnect_wait_ms, then per camera (left_, right_; one
-  // device side by side: sbs_) frames, dropped, retries, non_monotonic, sequence_gaps,
-  // software_timestamps, unpaired (two cameras), frozen, max_identical_run.
+  // reconnects, reconnect_frames_lost, reconnect_wait_ms, right_losses, left_only_frames
+  // (right_loss=left_only), then per camera (left_, right_; one device side by side: sbs_)
+  // frames, dropped, retries, non_monotonic, sequence_gaps, software_timestamps, unpaired (two
+  // cameras), frozen, max_identical_run.
   std::vector<std::pair<std::string, std::int64_t>> counters() const override;
   // Frames dropped by the pairing, per camera (0 left, 1 right).
   std::uint64_t unpairedDrops(int camera) const { return pairer_.dropped(camera); }
@@ -126,12 +145,22 @@ class V4l2StereoSource final : public StereoSource {
   std::uint64_t reconnects() const { return reconnects_; }
   std::uint64_t framesLostReconnecting() const { return frames_lost_; }
   std::uint64_t frozenDetections(int camera) const { return frozen_.detections(camera); }
+  std::uint64_t rightLosses() const { return right_losses_; }
+  std::uint64_t leftOnlyFrames() const { return left_only_frames_; }
 
  private:
   Result<bool> grabRaw(TimeNs& t_ns);
   // After an unplug: true once every capture streams again, false when stopped, else the error.
   Result<bool> reconnect(const Status& unplugged);
   void warn(const std::string& line);
+  // right_loss=left_only: the right camera is gone (`unplugged` its error).
+  void loseRight(const Status& unplugged);
+  // A frame from the left camera alone, after a reopen attempt of the right one when due
+  // (when it succeeds: a pair again).
+  Result<bool> nextLeftOnly(StereoFrame& out);
+  // Frozen check, frames-lost estimate after a reconnect, rectification and numbering of the
+  // frame grabbed at t_ns (right view empty when left_only).
+  Result<bool> deliver(TimeNs t_ns, bool left_only, StereoFrame& out);
 
   std::vector<std::unique_ptr<V4l2Capture>> captures_;
   StereoRectification rect_;
@@ -147,6 +176,9 @@ class V4l2StereoSource final : public StereoSource {
   TimeNs outage_start_ns_ = 0;
   std::uint64_t reconnects_ = 0, frames_lost_ = 0;
   TimeNs reconnect_wait_ns_ = 0;
+  bool right_lost_ = false;
+  TimeNs right_lost_since_ns_ = 0, next_right_attempt_ns_ = 0;
+  std::uint64_t right_losses_ = 0, left_only_frames_ = 0;
   std::mutex warn_mutex_;
   std::string warnings_;
 };
@@ -158,6 +190,7 @@ struct V4l2Setup {
   bool side_by_side = false;
   TimeNs sync_tolerance_ns = 0;
   ReconnectParams reconnect;
+  bool right_loss_left_only = false;  // right_loss=left_only
   FrozenCameraParams frozen;
   std::string calib;  // calib=FILE, "" when absent
   int viewWidth() const { return side_by_side ? params.width / 2 : params.width; }

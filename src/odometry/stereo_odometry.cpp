@@ -85,7 +85,7 @@ Status StereoOdometry::frontEnd(ImageView<const std::uint8_t> left, const Stereo
   if (!init_status_) return init_status_;
   if (left.width != calib_.width || left.height != calib_.height)
     return Status::invalidArgument("odometry: image size differs from the calibration's");
-  if (stereo.has_disparity != params_.dense || !stereo.finished)
+  if ((stereo.has_disparity != params_.dense && !stereo.left_only) || !stereo.finished)
     return Status::invalidArgument("odometry: the stereo stage output does not match the params");
   out = OdometryFrameResult{};
   out.frame = frame_;

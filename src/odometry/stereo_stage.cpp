@@ -28,6 +28,7 @@ bool stereoObservation(const StereoCalibration& calib, const DisparityResult* de
 
 void StereoStageOutput::clear() {
   has_disparity = false;
+  left_only = false;
   finished = false;
   corner_px.clear();
   corner_resp.clear();
@@ -90,15 +91,17 @@ void StereoStage::prepareOutput(StereoStageOutput& out) const {
 Status StereoStage::prepare(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                             StereoStageOutput& out, Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;
-  if (left.width != calib_.width || left.height != calib_.height || right.width != calib_.width ||
-      right.height != calib_.height)
+  const bool left_only = right.empty();
+  if (left.width != calib_.width || left.height != calib_.height ||
+      (!left_only && (right.width != calib_.width || right.height != calib_.height)))
     return Status::invalidArgument("stereo stage: image size differs from the calibration's");
   out.clear();
+  out.left_only = left_only;
   // A pooled output is sized once for the bound (no growth frame after frame).
   out.corner_px.reserve(max_points_);
   out.corner_resp.reserve(max_points_);
   out.points.reserve(max_points_);
-  if (dense_) {
+  if (dense_ && !left_only) {
     if (Status s = dense_->process(left, right, out.disparity, executor); !s) return s;
     out.has_disparity = true;
     if (observer) observer->stageDone("dense_stereo");
@@ -125,6 +128,17 @@ Status StereoStage::finish(ImageView<const std::uint8_t> left, ImageView<const s
                            const TrackingFeedback& feedback, StereoStageOutput& out,
                            StageObserver* observer) {
   if (!init_status_) return init_status_;
+  if (right.empty()) {  // the right camera lost: corners only (no match, no point, no cluster)
+    if (clusterer_) {
+      prev_clusters_.clear();
+      cur_clusters_.clear();
+    }
+    out.points.clear();
+    prev_points_ = 0;
+    out.finished = true;
+    if (observer) observer->stageDone("stereo_match");
+    return Status::ok();
+  }
   if (clusterer_) {  // the last frame's clusters become the previous ones
     prev_clusters_.swap(cur_clusters_);
     cur_clusters_.clear();

@@ -17,6 +17,9 @@
 // Steps 1-2 need the pair alone; steps 3-6 need the estimator's feedback on the previous frame
 // when ROI tracking is on (needsFeedback()), so a pipeline calls prepare() then, once that
 // feedback is there, finish(). process() does both.
+// An empty right view (the right camera lost: a source that delivers the left image alone)
+// runs step 2 only: corners, no disparity, no stereo match, no point (the estimator flies on
+// the left image, SlamSystem's camera-loss mode).
 // The stage's state between frames is the previous frame's clusters and point count (ROI
 // tracking only); a stage built from the same parameters gives the same output for the same
 // sequence of pairs and feedbacks, whatever the executor.
@@ -46,7 +49,8 @@ struct TrackingFeedback {
 
 // The product of the stereo stage for one pair. Buffers are reused from frame to frame.
 struct StereoStageOutput {
-  bool has_disparity = false;              // dense stereo ran (params.dense)
+  bool has_disparity = false;              // dense stereo ran (params.dense, a right view)
+  bool left_only = false;                  // the right view was empty: corners only
   DisparityResult disparity;               // left-image disparity and sigma_d, px
   bool finished = false;                   // steps 3-6 ran
   std::vector<Eigen::Vector2f> corner_px;  // detected points (after the ROI filter), left, px

@@ -193,5 +193,52 @@ TEST(Estimator, ModesBehindOneInterface) {
   EXPECT_TRUE(run_vo.estimator().map().empty());
 }
 
+// An empty right view (the right camera lost, v4l2 right_loss=left_only): the stage gives the
+// left corners and nothing that needs the right image; the ekf estimator flies on (a mono
+// frame, finite pose), the vo estimator reports the frame untracked without failing.
+TEST(StereoStage, EmptyRightViewGivesCornersOnly) {
+  auto src = drivers::openStereoSource("synthetic:width=384,height=288,frames=8");
+  ASSERT_TRUE(src.isOk());
+  const StereoCalibration calib = (*src)->calibration();
+  StereoOdometryParams p;
+  p.dense = true;
+  p.dense_stereo.max_disp = 64;
+  StereoStage stage(p, calib);
+  StereoStageOutput out;
+  SerialExecutor ex;
+  drivers::StereoFrame f;
+  ASSERT_TRUE((*src)->next(f).value());
+  const ImageView<const std::uint8_t> none;
+  ASSERT_TRUE(stage.process(f.left.cview(), none, {}, out, ex).isOk());
+  EXPECT_GT(out.corner_px.size(), 50u);
+  EXPECT_FALSE(out.has_disparity);
+  EXPECT_TRUE(out.points.empty());
+  EXPECT_TRUE(out.stereo.empty());
+  // A right view of the wrong size is still an error.
+  ImageU8 small(10, 10);
+  EXPECT_FALSE(stage.process(f.left.cview(), small.cview(), {}, out, ex).isOk());
+
+  FrameByFrame ekf(p, calib, makeEstimator(EstimatorKind::kEkf, SlamSystemParams{}, p, calib));
+  FrameByFrame vo(p, calib, makeEstimator(EstimatorKind::kVo, SlamSystemParams{}, p, calib));
+  SlamFrameResult e, v;
+  for (int k = 0; k < 8; ++k) {
+    if (k > 0) {
+      ASSERT_TRUE((*src)->next(f).value());
+    }
+    if (k < 4) {  // both cameras
+      ASSERT_TRUE(ekf.process(f.left.cview(), f.right.cview(), e, ex).isOk());
+      ASSERT_TRUE(vo.process(f.left.cview(), f.right.cview(), v, ex).isOk());
+      continue;
+    }
+    ASSERT_TRUE(ekf.process(f.left.cview(), none, e, ex).isOk()) << "frame " << k;
+    EXPECT_TRUE(e.mono);
+    EXPECT_EQ(e.right_camera, static_cast<int>(RightCameraState::kMissing));
+    EXPECT_TRUE(e.T_world_cam.matrix().allFinite());
+    ASSERT_TRUE(vo.process(f.left.cview(), none, v, ex).isOk()) << "frame " << k;
+    EXPECT_FALSE(v.odometry.tracked);
+    EXPECT_TRUE(v.T_world_cam.matrix().allFinite());
+  }
+}
+
 }  // namespace
 }  // namespace svslam

@@ -302,6 +302,75 @@ TEST(V4l2Source, RightCameraAndSideBySideDeviceReconnectToo) {
   }
 }
 
+// right_loss=left_only: the right camera unplugged after frame 2 and back after two failed
+// reopens; the left camera goes on alone in between (frames with an empty right view), never
+// waiting for the right one, and pairs resume when it is back.
+TEST(V4l2Source, RightCameraLossGoesOnWithTheLeftAloneUntilItIsBack) {
+  FakeV4l2Device dev;
+  dev.addCamera("/dev/video0", camera(kW, 0, framesAt(0, 11)));
+  dev.addCamera(
+      "/dev/video1",
+      camera(kW, 1, concat(concat(framesAt(0, 2), {FakeEvent::enodev()}), framesAt(9, 11))));
+  dev.camera("/dev/video1").replug_after_opens = 2;  // back at the third attempt
+  VirtualClock clock;
+  auto src = openV4l2Source(kPair + writeCalib("right_loss", kW, kH) +
+                                "&right_loss=left_only&reconnect_interval_ms=100",
+                            dev, {}, &clock);
+  ASSERT_TRUE(src) << src.status().message();
+  StereoFrame f;
+  for (int i = 0; i < 12; ++i) {
+    if (i == 5 || i == 7 || i == 9) clock.now += 100 * kNsPerMs;  // a reopen attempt is due
+    auto r = (*src)->next(f);
+    ASSERT_TRUE(r) << "frame " << i << ": " << r.status().message();
+    ASSERT_TRUE(*r);
+    EXPECT_EQ(f.index, i);
+    EXPECT_EQ(f.t_ns, (kNsPerS + i * kP) / 1000 * 1000) << "frame " << i;
+    EXPECT_LE(maxInteriorDiff(f.left, testing::expectedFrame(dev.camera("/dev/video0").base,
+                                                             static_cast<std::uint32_t>(i))),
+              1)
+        << "frame " << i;
+    const bool alone = i >= 3 && i <= 8;  // the left frame waiting at the unplug included
+    EXPECT_EQ(f.right.width() == 0 && f.right.height() == 0, alone) << "frame " << i;
+    if (!alone) {
+      EXPECT_LE(maxInteriorDiff(f.right, testing::expectedFrame(dev.camera("/dev/video1").base,
+                                                                static_cast<std::uint32_t>(i))),
+                1)
+          << "frame " << i;
+    }
+  }
+  EXPECT_TRUE(clock.waits.empty());  // never waited for the right camera
+  EXPECT_EQ(dev.opens("/dev/video0"), 1);
+  EXPECT_EQ(dev.opens("/dev/video1"), 1 + 3);
+  const auto c = counterMap(**src);
+  EXPECT_EQ(c.at("right_losses"), 1);
+  EXPECT_EQ(c.at("left_only_frames"), 6);
+  EXPECT_EQ(c.at("reconnects"), 0);
+  EXPECT_EQ((*src)->takeWarnings(),
+            "device unplugged: /dev/video1: going on with the left camera alone (reopening the "
+            "right one every 100 ms)\n"
+            "right camera back: /dev/video1 after 300 ms\n");
+  src->reset();
+  EXPECT_EQ(dev.openFds(), 0);
+  EXPECT_EQ(dev.mappedBuffers(), 0);
+}
+
+TEST(V4l2Source, RightLossOptionIsChecked) {
+  FakeV4l2Device dev;
+  dev.addCamera("/dev/video0", camera(kW, 0, framesAt(0, 0)));
+  dev.addCamera("/dev/video1", camera(kW, 1, framesAt(0, 0)));
+  auto bad = openV4l2Source(kPair + writeCalib("right_loss_bad", kW, kH) + "&right_loss=maybe", dev);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.status().message().find("right_loss must be 'reconnect' or 'left_only'"),
+            std::string::npos)
+      << bad.status().message();
+  auto sbs = openV4l2Source("/dev/video0?layout=side-by-side&width=160&height=60&right_loss="
+                            "left_only&calib=" + writeCalib("right_loss_sbs", kW, kH),
+                            dev);
+  ASSERT_FALSE(sbs);
+  EXPECT_NE(sbs.status().message().find("needs two cameras"), std::string::npos)
+      << sbs.status().message();
+}
+
 TEST(V4l2Source, UnpluggedCameraNeverBackIsAnErrorAtTheTimeout) {
   FakeV4l2Device dev;
   dev.addCamera("/dev/video0", camera(kW, 0, concat(framesAt(0, 0), {FakeEvent::enodev()})));
