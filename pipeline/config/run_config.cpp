@@ -42,6 +42,7 @@ Status parse(ConfigReader& r, RunConfig& out) {
   SVSLAM_TRY(r.finish());
   out.odometry.motion.seed = out.seed;
   out.slam.bearing_init.seed = out.seed;
+  out.slam.two_view.seed = out.seed;
   applyThreads(out, out.threads);
   return checkAcrossKeys(r.name(), out);
 }

@@ -4,6 +4,11 @@
 
 namespace svslam::config {
 
+namespace {
+inline constexpr EnumNames<MonoScaleSource, 2> kMonoScaleNames{
+    {{"first_pair", MonoScaleSource::kFirstPair}, {"none", MonoScaleSource::kNone}}};
+}  // namespace
+
 ConfigSection slamConfigSection() {
   ConfigSection s{"slam", "EKF SLAM (src/slam/slam_system.hpp, src/slam/ekf_slam.hpp)", {}};
   s.keys = {
@@ -103,6 +108,30 @@ ConfigSection slamConfigSection() {
       number("mono_track_error_px", SVSLAM_FIELD(slam.mono_track_error_px), 1e-3, 100, "px",
              "matching error of a bearing observation of a landmark tracked from the previous "
              "frame (no right image checks it)"),
+      choice("mono_scale", SVSLAM_FIELD(slam.mono_scale), kMonoScaleNames,
+             "mode mono: the scale source; first_pair: the first stereo pair (a metric map); "
+             "none: the left camera alone from the first frame, a two-view start (a map up to "
+             "scale, its unit set by mono_init_depth_m)"),
+      number("mono_init_points", SVSLAM_FIELD(slam.mono_init_points), 8, 4096, "",
+             "mono_scale none: corners of the reference frame tracked toward the two-view start "
+             "(>= two_view_min_inliers)"),
+      number("mono_init_max_frames", SVSLAM_FIELD(slam.mono_init_max_frames), 2, 100000, "",
+             "mono_scale none: a reference frame not initialised after this many frames is "
+             "replaced by the current one"),
+      number("mono_init_depth_m", SVSLAM_FIELD(slam.mono_init_depth_m), 1e-3, 1e6, "m",
+             "mono_scale none: the median depth given to the first map's points (the map's unit; "
+             "the expected scene depth keeps the metre-valued sigmas meaningful)"),
+      number("mono_init_max_rel_sigma", SVSLAM_FIELD(slam.mono_init_max_rel_sigma), 1e-4, 1, "",
+             "mono_scale none: a first point enters the map when sqrt(trace cov) is at most this "
+             "fraction of its depth"),
+      number("two_view_ransac_iterations", SVSLAM_FIELD(slam.two_view.ransac_iterations), 1,
+             100000, "", "two-view start: RANSAC hypotheses per model (essential, homography)"),
+      number("two_view_inlier_px", SVSLAM_FIELD(slam.two_view.inlier_threshold_px), 0.01, 100,
+             "px", "two-view start: residual sigma of the inlier tests"),
+      number("two_view_min_inliers", SVSLAM_FIELD(slam.two_view.min_inliers), 8, 4096, "",
+             "two-view start: triangulated inliers needed"),
+      number("two_view_min_parallax_deg", SVSLAM_FIELD(slam.two_view.min_parallax_deg), 0.01, 90,
+             "deg", "two-view start: median triangulation angle needed"),
       number("mono_reperception_error_px", SVSLAM_FIELD(slam.mono_reperception_error_px), 1e-3,
              100, "px", "matching error of a re-perceived landmark's bearing observation"),
   };

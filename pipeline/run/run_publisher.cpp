@@ -68,7 +68,8 @@ Status RunPublisher::publish(const rt::FrameSlot& slot) {
   p.seq = slot.seq;
   p.T_world_cam = sr.T_world_cam;
   p.cov = sr.pose_cov;
-  p.status = sr.mono                  ? drivers::TrackingStatus::kMonocular
+  p.status = sr.initializing          ? drivers::TrackingStatus::kInitializing
+             : sr.mono                ? drivers::TrackingStatus::kMonocular
              : sr.odometry.frame == 0 ? drivers::TrackingStatus::kInitializing
              : sr.odometry.tracked    ? drivers::TrackingStatus::kTracking
                                       : drivers::TrackingStatus::kLost;

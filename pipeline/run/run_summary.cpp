@@ -32,6 +32,7 @@ void RunSummary::add(int frame, const SlamFrameResult& sr) {
   ++right_camera_state_counts[std::clamp(sr.right_camera, 0, 3)];
   if (sr.mono) {
     ++mono_frames;
+    if (sr.initializing) ++mono_initializing;
     if (!prev_mono_) ++right_camera_losses;
   }
   prev_mono_ = sr.mono;
@@ -96,6 +97,7 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
       // Camera loss: frames posed from the left image alone (bearings of the map), the times
       // the right camera became unusable and why, frame by frame
       .add("frames_monocular", s.mono_frames)
+      .add("frames_mono_initializing", s.mono_initializing)
       .add("right_camera_losses", s.right_camera_losses)
       .add("frames_stereo_resumed_untracked", s.resumed_untracked)
       .add("right_camera_missing_frames", s.right_camera_state_counts[1])

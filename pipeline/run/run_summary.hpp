@@ -38,6 +38,7 @@ struct RunSummary {
   // right camera became unusable, each frame's RightCameraState (ok, missing, flat, frozen),
   // landmarks initialised from bearings, bearings accepted and their d^2 (2 dof each).
   int mono_frames = 0, right_camera_losses = 0, bearing_added = 0;
+  int mono_initializing = 0;  // monocular frames before the two-view start (no map, no pose)
   int resumed_untracked = 0;  // first stereo frames after mono ones the odometry did not track
   std::int64_t bearing_count = 0;
   double sum_bearing_nis = 0;

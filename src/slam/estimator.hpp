@@ -6,7 +6,8 @@
 //   ekf  SlamSystem: the same front end predicting an EKF over the pose and 3D landmarks
 //        (slam/slam_system.hpp);
 //   mono SlamSystem from the left camera alone, bearing observations; the first pair's stereo
-//        points give the scale (slam_system.hpp, "Monocular mode").
+//        points give the scale, or (slam.mono_scale none) a two-view start from the left
+//        camera alone gives a map up to scale (slam_system.hpp, "Monocular mode").
 // Every estimator also returns the feedback the stereo stage of the next frame needs (the
 // predicted motion for clustered-feature ROI tracking).
 #include <memory>
@@ -55,6 +56,9 @@ struct SlamFrameResult {
   // image (0 ok, 1 missing, 2 flat, 3 frozen). Bearings accepted and the sum of their d^2
   // (2 dof each); landmarks initialised from bearings.
   bool mono = false;
+  // Monocular mode without a scale source, before its two-view start: no map, no pose (the
+  // world origin is published with an uninformative covariance; mono is also set).
+  bool initializing = false;
   bool stereo_resumed = false;  // first stereo frame after mono ones (predicted by the filter:
                                 // the odometry's previous frame is stale and may fail)
   int right_camera = 0;

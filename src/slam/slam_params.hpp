@@ -4,8 +4,15 @@
 #include "slam/bearing_initializer.hpp"
 #include "slam/ekf_slam.hpp"
 #include "slam/right_camera_monitor.hpp"
+#include "slam/two_view_initializer.hpp"
 
 namespace svslam {
+
+// What gives the monocular mode's map its scale (slam_system.hpp, "Monocular mode").
+enum class MonoScaleSource {
+  kFirstPair,  // the first stereo pair's points: a metric map
+  kNone,       // the left camera alone from the first frame (two-view start): up to scale
+};
 
 struct SlamSystemParams {
   EkfSlamParams ekf;
@@ -61,6 +68,21 @@ struct SlamSystemParams {
   // (config/mono_real_camera.yaml doubles them).
   double mono_track_error_px = 0.5;
   double mono_reperception_error_px = 1.0;
+  // Monocular mode's scale source and, with kNone, the two-view start: up to mono_init_points
+  // corners of the reference frame are tracked (ZNCC, mono_search_px around their last
+  // position moved by the median flow) and the relative pose of the reference and the current
+  // frame is estimated at every frame (two_view: essential matrix or homography) until it is
+  // accepted; a reference not initialised after mono_init_max_frames frames, or left with
+  // fewer than two_view.min_inliers tracks, is replaced by the current frame. The map's unit:
+  // the median depth of the first points is mono_init_depth_m (m, > 0; set it to the expected
+  // scene depth so that the metre-valued sigmas keep their sense; the map is up to scale).
+  MonoScaleSource mono_scale = MonoScaleSource::kFirstPair;
+  TwoViewInitializerParams two_view;
+  int mono_init_points = 300;       // [two_view.min_inliers, 4096]
+  int mono_init_max_frames = 60;    // >= 2
+  double mono_init_depth_m = 10.0;  // > 0
+  double mono_init_max_rel_sigma = 0.1;  // a first point enters the map when its sqrt(trace cov)
+                                         // is at most this fraction of its depth, (0, 1]
   int map_reserve = 4096;  // landmarks held at once (in the state, anchored, or in the retired
                            // map) whose storage is preallocated (about 0.7 kB each),
                            // >= ekf.max_landmarks; beyond it the storage grows by doubling

@@ -64,6 +64,17 @@ Status SlamSystemParams::validate() const {
         "slam.mono_candidate_min_frames must be >= 2 and <= mono_candidate_max_frames");
   if (!(mono_bearing_sigma_px > 0.0) || !(mono_search_px > 0.0))
     return Status::invalidArgument("slam.mono_bearing_sigma_px and mono_search_px must be > 0");
+  if (Status s = two_view.validate(); !s)
+    return Status::invalidArgument("slam.two_view_* (" + s.message() + ")");
+  if (mono_init_points < two_view.min_inliers || mono_init_points > 4096)
+    return Status::invalidArgument(
+        "slam.mono_init_points must be in [slam.two_view_min_inliers, 4096]");
+  if (mono_init_max_frames < 2)
+    return Status::invalidArgument("slam.mono_init_max_frames must be >= 2");
+  if (!(mono_init_depth_m > 0.0) || !std::isfinite(mono_init_depth_m))
+    return Status::invalidArgument("slam.mono_init_depth_m must be > 0 and finite");
+  if (!(mono_init_max_rel_sigma > 0.0 && mono_init_max_rel_sigma <= 1.0))
+    return Status::invalidArgument("slam.mono_init_max_rel_sigma must be in (0, 1]");
   if (map_reserve < ekf.max_landmarks)
     return Status::invalidArgument("slam.map_reserve must be >= max_landmarks");
   return Status::ok();
@@ -79,12 +90,14 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
       landmark_row_matcher_(odometry.stereo_match),
       right_monitor_(params.right_camera),
       bearing_init_(params.bearing_init),
+      two_view_(params.two_view),
       left_only_(left_only) {
   init_status_ = params.validate();
   if (init_status_) init_status_ = vo_.initStatus();
   if (init_status_) init_status_ = ekf_.initStatus();
   if (init_status_) init_status_ = landmark_row_matcher_.initStatus();
   if (init_status_) init_status_ = bearing_init_.initStatus();
+  if (init_status_) init_status_ = two_view_.initStatus();
   cell_count_.resize(static_cast<std::size_t>(params.grid_cols * params.grid_rows));
   if (!init_status_) return;
   mono_cands_.resize(static_cast<std::size_t>(params.mono_max_candidates));
@@ -92,6 +105,15 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
                        static_cast<std::size_t>((2 * params.patch_half_px + 1) *
                                                 (2 * params.patch_half_px + 1)));
   bobs_.reserve(static_cast<std::size_t>(params.max_observations));
+  if (left_only && params.mono_scale == MonoScaleSource::kNone) {
+    const std::size_t n = static_cast<std::size_t>(params.mono_init_points);
+    const int side = 2 * params.patch_half_px + 1;
+    init_tracks_.reserve(n);
+    init_patches_.resize(n * static_cast<std::size_t>(side * side));
+    init_x0_.reserve(n);
+    init_x1_.reserve(n);
+    init_index_.reserve(n);
+  }
   const std::size_t lm = static_cast<std::size_t>(params.ekf.max_landmarks);
   const std::size_t n_obs = static_cast<std::size_t>(params.max_observations);
   preds_.reserve(lm);
@@ -150,6 +172,11 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
                            Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;
   out = SlamFrameResult{};
+  if (left_only_ && params_.mono_scale == MonoScaleSource::kNone && !mono_started_) {
+    if (Status s = processMonoStart(left, stereo, out); !s) return s;
+    if (observer) observer->stageDone("ekf");
+    return Status::ok();
+  }
   if (left_only_) {
     if (frame_ > 0) {
       if (Status s = processMono(left, stereo, out, executor); !s) return s;

@@ -69,7 +69,23 @@
 // pair is the scale source (the only use of the right image): its stereo points, the most
 // precise first and at most max_per_cell per grid cell, are initialised at once from the exact
 // first pose (EkfSlam::addLandmarkFromExactPose, anchored like step 4's), and every later frame
-// is a mono frame as above (the right image is not looked at).
+// is a mono frame as above (the right image is not looked at). Without a scale source
+// (slam.mono_scale none) the right image is never looked at: the first frame is the reference
+// (the world origin); up to mono_init_points of its corners are tracked by ZNCC (template
+// following the corner, searched mono_search_px around its last position moved by the last
+// frame's median flow) and at every frame TwoViewInitializer estimates the relative pose of
+// the reference and the current frame (essential matrix or homography, chosen by score;
+// triangulation, cheirality and parallax checks). Until it accepts one, the frame is
+// `initializing` (the origin is published with an uninformative covariance); a reference not
+// initialised after mono_init_max_frames frames, or left with too few tracks, is replaced by
+// the current frame (the world origin moves to it). Once accepted, the unit is set so that the
+// points' median depth is mono_init_depth_m; each point, with its linearised two-view
+// covariance C = (sum_k (I - d_k d_k^T) / (sigma r_k)^2)^-1 (the two bearings d_k at range
+// r_k, sigma = mono_bearing_sigma_px / f, poses exact), enters the filter anchored at the
+// exact reference pose when sqrt(trace C) <= mono_init_max_rel_sigma times its depth, the most
+// precise first, at most max_per_cell per cell; the filter is put at the current frame's pose
+// with the monocular second frame's covariance (mono_start_*), and the next prediction is the
+// mean motion since the reference. Later frames are mono frames as above.
 // Memory: every per-frame buffer is a member sized in the constructor (or grown once to the
 // frame's stereo point count); the map's bookkeeping is preallocated for map_reserve landmarks.
 // Once warm, a frame allocates nothing while the map holds fewer than map_reserve landmarks
@@ -92,6 +108,7 @@
 #include "slam/estimator.hpp"
 #include "slam/right_camera_monitor.hpp"
 #include "slam/slam_params.hpp"
+#include "slam/two_view_initializer.hpp"
 #include "slam/landmark_manager.hpp"
 
 namespace svslam {
@@ -150,6 +167,16 @@ class SlamSystem final : public Estimator {
   // Monocular mode, frame 0: the map from the first pair's stereo points (vo_.points(), after
   // the front end), anchored at the exact first pose; fills out.added.
   void mapFirstPair(ImageView<const std::uint8_t> left, SlamFrameResult& out);
+  // Monocular mode without a scale source, before the map exists: tracks the reference
+  // frame's corners and tries the two-view start (slam_mono_start.cpp).
+  Status processMonoStart(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo,
+                          SlamFrameResult& out);
+  // The reference frame of the two-view start: the world origin, its corners to track.
+  void startReference(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo);
+  void trackReference(ImageView<const std::uint8_t> left);
+  // The map from an accepted two-view estimate (two_view_result_), the filter at the current
+  // frame's pose; fills out.added.
+  Status mapTwoView(ImageView<const std::uint8_t> left, SlamFrameResult& out);
   // diag(rot^2 I3, trans^2 I3), [dtheta (rad), dt (m)]: the motion covariance of a predicted
   // (not measured) frame.
   static Matrix6d diagonalMotionCov(double rot_sigma_rad, double trans_sigma_m);
@@ -252,6 +279,22 @@ class SlamSystem final : public Estimator {
   std::uint64_t mono_serial_ = 0;
   std::vector<double> depth_scratch_;
   std::vector<BearingView<3>> bearing_views_;
+  // Two-view start (MonoScaleSource::kNone): the reference frame's corners, their pixel there
+  // and now, templates at slot * (2 patch_half_px + 1)^2 of init_patches_.
+  struct InitTrack {
+    bool alive = false;
+    float u0 = 0, v0 = 0;  // in the reference frame, px
+    float u = 0, v = 0;    // last position, px
+  };
+  TwoViewInitializer two_view_;
+  TwoViewResult two_view_result_;
+  std::vector<InitTrack> init_tracks_;
+  std::vector<std::uint8_t> init_patches_;
+  std::vector<Eigen::Vector2d> init_x0_, init_x1_;  // normalised coordinates of the live tracks
+  std::vector<int> init_index_;                     // their track index
+  Eigen::Vector2f init_flow_ = Eigen::Vector2f::Zero();  // median flow of the last frame, px
+  int reference_frame_ = 0;
+  bool mono_started_ = false;  // the two-view start's map exists
   bool left_only_ = false;
   bool prev_mono_ = false;
   Eigen::Isometry3d prev_pose_ = Eigen::Isometry3d::Identity();    // filter pose, last frame
