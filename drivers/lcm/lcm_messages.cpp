@@ -99,6 +99,7 @@ bool scan(WireWalker& w, const svslam_lcm::command_t*) {
 bool scan(WireWalker& w, const svslam_lcm::command_status_t*) {
   return w.skip(8 + 16) && w.str() && w.skip(1) && w.str() && w.atEnd();
 }
+bool scan(WireWalker& w, const svslam_lcm::altitude_t*) { return w.skip(8 + 24) && w.atEnd(); }
 
 template <class Msg>
 Status decodeChecked(const void* data, std::size_t size, Msg& out, const char* type) {
@@ -422,6 +423,10 @@ Status decodeLcm(const void* d, std::size_t n, svslam_lcm::command_t& out) {
 }
 Status decodeLcm(const void* d, std::size_t n, svslam_lcm::command_status_t& out) {
   return decodeChecked(d, n, out, "command_status_t");
+}
+
+Status decodeLcm(const void* d, std::size_t n, svslam_lcm::altitude_t& out) {
+  return decodeChecked(d, n, out, "altitude_t");
 }
 
 }  // namespace svslam::drivers

@@ -22,6 +22,7 @@
 #include "core/time.hpp"
 #include "drivers/lcm/command_gate.hpp"
 #include "drivers/source/stereo_source.hpp"
+#include "svslam_lcm/altitude_t.hpp"
 #include "svslam_lcm/command_status_t.hpp"
 #include "svslam_lcm/command_t.hpp"
 #include "svslam_lcm/map_summary_t.hpp"
@@ -170,5 +171,6 @@ Status decodeLcm(const void* data, std::size_t size, svslam_lcm::map_summary_t& 
 Status decodeLcm(const void* data, std::size_t size, svslam_lcm::stereo_image_t& out);
 Status decodeLcm(const void* data, std::size_t size, svslam_lcm::command_t& out);
 Status decodeLcm(const void* data, std::size_t size, svslam_lcm::command_status_t& out);
+Status decodeLcm(const void* data, std::size_t size, svslam_lcm::altitude_t& out);
 
 }  // namespace svslam::drivers

@@ -48,6 +48,8 @@ struct LcmParams {
   std::string correction_channel = "SVSLAM_POSE_CORRECTION";
   std::string command_channel = "SVSLAM_COMMAND";
   std::string status_channel = "SVSLAM_COMMAND_STATUS";
+  // Read (not published): svslam_lcm.altitude_t, the monocular mode's scale source.
+  std::string altitude_channel = "SVSLAM_ALTITUDE";
 
   Status validate() const;
 };

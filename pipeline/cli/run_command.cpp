@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 #include <system_error>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -457,6 +458,7 @@ int runPipeline(const std::vector<std::string>& args) {
   summary.source_frames_skipped = source->skippedFrames();
   summary.source_frames_skipped_detail = source->skippedFramesDetail();
   summary.source_counters = source->counters();
+  std::tie(summary.altitude_readings, summary.altitude_rejected) = work.altitudeReadings();
   if (lcm) {
     refused_log.update(*lcm, rt::steadyNowNs(), true);
     summary.lcm_commands = lcm->commandCounts();

@@ -97,6 +97,9 @@ ConfigSection lcmSection() {
            "lcm.commands)"),
       text("status_channel", SVSLAM_FIELD(lcm.params.status_channel),
            "svslam_lcm.command_status_t answers"),
+      text("altitude_channel", SVSLAM_FIELD(lcm.params.altitude_channel),
+           "read: svslam_lcm.altitude_t, the camera's height above the ground (mode mono with "
+           "slam.mono_scale altitude)"),
       number("stats_period_s", SVSLAM_FIELD(lcm.stats_period_s), 0.01, 3600, "s",
              "stats and map summary every this many s"),
   };

@@ -5,8 +5,10 @@
 namespace svslam::config {
 
 namespace {
-inline constexpr EnumNames<MonoScaleSource, 2> kMonoScaleNames{
-    {{"first_pair", MonoScaleSource::kFirstPair}, {"none", MonoScaleSource::kNone}}};
+inline constexpr EnumNames<MonoScaleSource, 3> kMonoScaleNames{
+    {{"first_pair", MonoScaleSource::kFirstPair},
+     {"none", MonoScaleSource::kNone},
+     {"altitude", MonoScaleSource::kAltitude}}};
 }  // namespace
 
 ConfigSection slamConfigSection() {
@@ -111,7 +113,8 @@ ConfigSection slamConfigSection() {
       choice("mono_scale", SVSLAM_FIELD(slam.mono_scale), kMonoScaleNames,
              "mode mono: the scale source; first_pair: the first stereo pair (a metric map); "
              "none: the left camera alone from the first frame, a two-view start (a map up to "
-             "scale, its unit set by mono_init_depth_m)"),
+             "scale, its unit set by mono_init_depth_m); altitude: the same start, its unit from "
+             "the altimeter on lcm.altitude_channel (a metric map; needs lcm.enabled)"),
       number("mono_init_points", SVSLAM_FIELD(slam.mono_init_points), 8, 4096, "",
              "mono_scale none: corners of the reference frame tracked toward the two-view start "
              "(>= two_view_min_inliers)"),

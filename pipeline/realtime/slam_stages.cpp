@@ -4,6 +4,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include "drivers/lcm/lcm_altitude.hpp"
 #include "pipeline/realtime/stage_health.hpp"
 #include "pipeline/service/scheduling.hpp"
 #include "pipeline/thread_pool_executor.hpp"
@@ -30,7 +31,14 @@ SlamStages::SlamStages(const config::RunConfig& cfg, drivers::StereoSource& sour
                        const std::string& out_dir, drivers::LcmLink* lcm)
     : cfg_(cfg), source_(source), out_dir_(out_dir), lcm_(lcm) {}
 
-SlamStages::~SlamStages() = default;
+SlamStages::~SlamStages() {
+  if (lcm_ && altitude_sub_ >= 0) (void)lcm_->unsubscribe(altitude_sub_);
+}
+
+std::pair<std::int64_t, std::int64_t> SlamStages::altitudeReadings() const {
+  if (altitude_sub_ < 0) return {-1, -1};
+  return {altitude_inbox_.accepted(), altitude_inbox_.rejected()};
+}
 
 Status SlamStages::buildEstimator() {
   estimator_ = makeEstimator(cfg_.mode, cfg_.slam, cfg_.odometry, source_.calibration());
@@ -41,6 +49,23 @@ Status SlamStages::init() {
   stereo_stage_ = std::make_unique<StereoStage>(cfg_.odometry, source_.calibration());
   if (Status s = stereo_stage_->initStatus(); !s) return s;
   if (Status s = buildEstimator(); !s) return s;
+  if (cfg_.mode == config::EstimatorMode::kMono &&
+      cfg_.slam.mono_scale == MonoScaleSource::kAltitude) {
+    if (!lcm_)
+      return Status::invalidArgument(
+          "slam.mono_scale altitude reads the altimeter on LCM (lcm.altitude_channel): enable "
+          "LCM (lcm.enabled: true or --lcm-url)");
+    auto sub = lcm_->subscribeRaw(cfg_.lcm.params.altitude_channel,
+                                  [this](const std::uint8_t* data, std::size_t size) {
+                                    drivers::AltitudeReading r;
+                                    if (drivers::decodeAltitude(data, size, r))
+                                      altitude_inbox_.push(r.t_ns, r.altitude_m);
+                                    else
+                                      altitude_inbox_.reject();
+                                  });
+    if (!sub) return sub.status();
+    altitude_sub_ = *sub;
+  }
   // One pool per stage thread (a ThreadPoolExecutor serves one parallelFor at a time); the
   // estimator's splits the EKF update's products. Results do not depend on either.
   if (cfg_.threads > 1) {
@@ -200,6 +225,11 @@ Status SlamStages::estimateFrame(FrameSlot& slot) {
     if (Status s = estimator_->applyLoopCorrection(C_new_old, cov_world, moved); !s)
       return Status(s.code(), "frame " + std::to_string(slot.frame.index) + ": " + s.message());
     loop_stage_->correctionApplied(slot.frame.index, moved);
+  }
+  if (altitude_sub_ >= 0) {
+    double altitude_m = 0;
+    if (altitude_inbox_.latestAtOrBefore(slot.frame.t_ns, altitude_m))
+      estimator_->setAltitude(altitude_m);
   }
   estimator_clock_->start();
   const Status s =

@@ -16,12 +16,14 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
 
 #include "core/executor.hpp"
 #include "drivers/lcm/lcm_transport.hpp"
 #include "drivers/source/stereo_source.hpp"
 #include "odometry/stereo_stage.hpp"
 #include "pipeline/config/run_config.hpp"
+#include "pipeline/realtime/altitude_inbox.hpp"
 #include "pipeline/realtime/edges.hpp"
 #include "pipeline/realtime/loop_stage.hpp"
 #include "pipeline/realtime/map_stage.hpp"
@@ -73,6 +75,8 @@ class SlamStages {
   const MapStage* mapStage() const { return map_stage_.get(); }
   // stats.json's "loop" object (empty without loop closing).
   std::string loopJson() const;
+  // Altimeter readings received and rejected (-1, -1 when the run does not read them).
+  std::pair<std::int64_t, std::int64_t> altitudeReadings() const;
   // Warnings met while starting threads (scheduling not permitted) and the source's (a camera
   // reconnected or frozen), for the log.
   std::string takeWarnings();
@@ -91,6 +95,10 @@ class SlamStages {
 
   config::RunConfig cfg_;
   drivers::StereoSource& source_;
+  // The altimeter (mode mono, slam.mono_scale altitude): filled by the LCM handler, read by the
+  // estimator before each frame; altitude_sub_ the subscription (-1: none).
+  AltitudeInbox altitude_inbox_;
+  int altitude_sub_ = -1;
   std::string out_dir_;
   drivers::LcmLink* lcm_;
   std::atomic<std::int64_t> captured_{0};

@@ -33,6 +33,7 @@ void RunSummary::add(int frame, const SlamFrameResult& sr) {
   if (sr.mono) {
     ++mono_frames;
     if (sr.initializing) ++mono_initializing;
+    if (sr.altitude_scaled) altitude_scaled_frame = frame;
     if (!prev_mono_) ++right_camera_losses;
   }
   prev_mono_ = sr.mono;
@@ -98,6 +99,9 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
       // the right camera became unusable and why, frame by frame
       .add("frames_monocular", s.mono_frames)
       .add("frames_mono_initializing", s.mono_initializing)
+      .add("mono_scale_from_altitude_frame", s.altitude_scaled_frame)
+      .add("altitude_readings", s.altitude_readings)
+      .add("altitude_readings_rejected", s.altitude_rejected)
       .add("right_camera_losses", s.right_camera_losses)
       .add("frames_stereo_resumed_untracked", s.resumed_untracked)
       .add("right_camera_missing_frames", s.right_camera_state_counts[1])

@@ -51,6 +51,10 @@ struct RunSummary {
   std::vector<std::pair<std::string, std::int64_t>> source_counters;
   // LCM commands received (accepted, refused by reason); empty when LCM is off.
   std::optional<drivers::CommandCounts> lcm_commands;
+  // Altimeter readings received and rejected on LCM (mono_scale altitude; -1 when not read),
+  // and the frame whose two-view start took its unit from one (-1: none).
+  std::int64_t altitude_readings = -1, altitude_rejected = -1;
+  int altitude_scaled_frame = -1;
 
   // Adds one processed frame (source index `frame`).
   void add(int frame, const SlamFrameResult& r);

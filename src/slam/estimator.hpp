@@ -59,6 +59,7 @@ struct SlamFrameResult {
   // Monocular mode without a scale source, before its two-view start: no map, no pose (the
   // world origin is published with an uninformative covariance; mono is also set).
   bool initializing = false;
+  bool altitude_scaled = false;  // this frame's two-view start took its unit from the altimeter
   bool stereo_resumed = false;  // first stereo frame after mono ones (predicted by the filter:
                                 // the odometry's previous frame is stale and may fail)
   int right_camera = 0;
@@ -88,6 +89,10 @@ class Estimator {
                          StageObserver* observer = nullptr) = 0;
   // For the stereo stage of the next frame.
   virtual TrackingFeedback feedback() const = 0;
+  // The camera's height above the ground (m, from an altimeter) at the coming frame, for the
+  // monocular mode's scale (slam.mono_scale = altitude); ignored by the other estimators and
+  // when not finite and > 0. Holds until replaced.
+  virtual void setAltitude(double altitude_m) { (void)altitude_m; }
   // Every landmark ever initialised (empty without a landmark map).
   virtual std::vector<MapLandmark> map() const { return {}; }
   // Loop closing's correction (pipeline/realtime/loop_stage.hpp): the back end puts the current

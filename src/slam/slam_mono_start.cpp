@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
+
 #include "slam/patch_tracking.hpp"
 #include "slam/slam_system.hpp"
 
@@ -121,8 +123,12 @@ Status SlamSystem::processMonoStart(ImageView<const std::uint8_t> left,
       init_index_.push_back(static_cast<int>(k));
     }
     out.mono_candidates = static_cast<int>(init_index_.size());
+    const bool wait_altitude =
+        params_.mono_scale == MonoScaleSource::kAltitude && !(altitude_m_ > 0.0);
     if (static_cast<int>(init_index_.size()) < params_.two_view.min_inliers) {
       restart = true;
+    } else if (wait_altitude) {
+      restart = frame_ - reference_frame_ >= params_.mono_init_max_frames;
     } else {
       if (Status s = two_view_.process(init_x0_, init_x1_, f, static_cast<std::uint64_t>(frame_),
                                        two_view_result_);
@@ -168,14 +174,34 @@ Status SlamSystem::mapTwoView(ImageView<const std::uint8_t> left, SlamFrameResul
   const TwoViewResult& tv = two_view_result_;
   const int h = params_.patch_half_px;
   const double f = calib_.f_px;
-  // The unit: the median depth of the kept points (reference camera) is mono_init_depth_m.
+  // The unit. mono_scale none: the median depth of the kept points (reference camera) is
+  // mono_init_depth_m. altitude: the current camera's distance to the plane fitted to the kept
+  // points (least squares: through their centroid, normal along the smallest eigenvector of
+  // their scatter) is the altimeter's reading.
   std::vector<double>& z = depth_scratch_;
   z.clear();
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < init_index_.size(); ++i)
-    if (tv.inlier[i]) z.push_back(tv.p0[i].z());
-  if (z.empty()) return Status::ok();
-  std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
-  const double scale = params_.mono_init_depth_m / z[z.size() / 2];
+    if (tv.inlier[i]) {
+      z.push_back(tv.p0[i].z());
+      centroid += tv.p0[i];
+    }
+  if (z.size() < 3) return Status::ok();
+  double scale = 0;
+  if (params_.mono_scale == MonoScaleSource::kAltitude) {
+    centroid /= static_cast<double>(z.size());
+    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    for (std::size_t i = 0; i < init_index_.size(); ++i)
+      if (tv.inlier[i]) scatter += (tv.p0[i] - centroid) * (tv.p0[i] - centroid).transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+    const Eigen::Vector3d normal = eig.eigenvectors().col(0);
+    const Eigen::Vector3d o_cur = -tv.R_1_0.transpose() * tv.t_1_0;  // unit baseline
+    const double height = std::abs(normal.dot(o_cur - centroid));
+    scale = altitude_m_ / height;
+  } else {
+    std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+    scale = params_.mono_init_depth_m / z[z.size() / 2];
+  }
   if (!(scale > 0.0) || !std::isfinite(scale)) return Status::ok();
   Eigen::Isometry3d T_cur_ref = Eigen::Isometry3d::Identity();
   T_cur_ref.linear() = tv.R_1_0;
@@ -259,6 +285,7 @@ Status SlamSystem::mapTwoView(ImageView<const std::uint8_t> left, SlamFrameResul
     ++out.added;
   }
   mono_started_ = true;
+  out.altitude_scaled = params_.mono_scale == MonoScaleSource::kAltitude;
   return Status::ok();
 }
 

@@ -12,6 +12,9 @@ namespace svslam {
 enum class MonoScaleSource {
   kFirstPair,  // the first stereo pair's points: a metric map
   kNone,       // the left camera alone from the first frame (two-view start): up to scale
+  kAltitude,   // the same two-view start, its unit from an altimeter (Estimator::setAltitude):
+               // the camera's height above the plane fitted to the first points is the
+               // altitude; the start waits for a reading
 };
 
 struct SlamSystemParams {
@@ -75,7 +78,8 @@ struct SlamSystemParams {
   // accepted; a reference not initialised after mono_init_max_frames frames, or left with
   // fewer than two_view.min_inliers tracks, is replaced by the current frame. The map's unit:
   // the median depth of the first points is mono_init_depth_m (m, > 0; set it to the expected
-  // scene depth so that the metre-valued sigmas keep their sense; the map is up to scale).
+  // scene depth so that the metre-valued sigmas keep their sense; the map is up to scale), or
+  // with kAltitude the reading of the frame accepted (a metric map).
   MonoScaleSource mono_scale = MonoScaleSource::kFirstPair;
   TwoViewInitializerParams two_view;
   int mono_init_points = 300;       // [two_view.min_inliers, 4096]

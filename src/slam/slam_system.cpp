@@ -105,7 +105,7 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
                        static_cast<std::size_t>((2 * params.patch_half_px + 1) *
                                                 (2 * params.patch_half_px + 1)));
   bobs_.reserve(static_cast<std::size_t>(params.max_observations));
-  if (left_only && params.mono_scale == MonoScaleSource::kNone) {
+  if (left_only && params.mono_scale != MonoScaleSource::kFirstPair) {
     const std::size_t n = static_cast<std::size_t>(params.mono_init_points);
     const int side = 2 * params.patch_half_px + 1;
     init_tracks_.reserve(n);
@@ -172,7 +172,7 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
                            Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;
   out = SlamFrameResult{};
-  if (left_only_ && params_.mono_scale == MonoScaleSource::kNone && !mono_started_) {
+  if (left_only_ && params_.mono_scale != MonoScaleSource::kFirstPair && !mono_started_) {
     if (Status s = processMonoStart(left, stereo, out); !s) return s;
     if (observer) observer->stageDone("ekf");
     return Status::ok();

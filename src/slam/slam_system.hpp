@@ -92,6 +92,7 @@
 // (in the state, anchored or retired; the retired map is bounded by the volume flown over).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -130,6 +131,10 @@ class SlamSystem final : public Estimator {
   // then detects over the whole image, no ROI from a stale motion).
   TrackingFeedback feedback() const override {
     return prev_mono_ ? TrackingFeedback{} : vo_.feedback();
+  }
+
+  void setAltitude(double altitude_m) override {
+    if (std::isfinite(altitude_m) && altitude_m > 0.0) altitude_m_ = altitude_m;
   }
 
   // Every landmark ever initialised: in the state (current estimate) or retired.
@@ -279,7 +284,7 @@ class SlamSystem final : public Estimator {
   std::uint64_t mono_serial_ = 0;
   std::vector<double> depth_scratch_;
   std::vector<BearingView<3>> bearing_views_;
-  // Two-view start (MonoScaleSource::kNone): the reference frame's corners, their pixel there
+  // Two-view start (mono_scale none or altitude): the reference frame's corners, their pixel there
   // and now, templates at slot * (2 patch_half_px + 1)^2 of init_patches_.
   struct InitTrack {
     bool alive = false;
@@ -295,6 +300,7 @@ class SlamSystem final : public Estimator {
   Eigen::Vector2f init_flow_ = Eigen::Vector2f::Zero();  // median flow of the last frame, px
   int reference_frame_ = 0;
   bool mono_started_ = false;  // the two-view start's map exists
+  double altitude_m_ = 0;      // the last altimeter reading (0: none yet), m
   bool left_only_ = false;
   bool prev_mono_ = false;
   Eigen::Isometry3d prev_pose_ = Eigen::Isometry3d::Identity();    // filter pose, last frame

@@ -19,7 +19,7 @@ fi
 expected=(bin/svslam lib/systemd/system/svslam.service share/svslam/svslam.yaml
           lib/cmake/svslam_lcm_types/svslam_lcm_typesConfig.cmake lib/pkgconfig/svslam_lcm_types.pc
           lib/libsvslam_lcm_c.a)
-for t in pose_t stats_t map_summary_t map_tile_t pose_correction_t command_t command_status_t \
+for t in pose_t stats_t map_summary_t map_tile_t pose_correction_t altitude_t command_t command_status_t \
          stereo_image_t; do
   expected+=("include/svslam/lcm/svslam_lcm/$t.hpp" "include/svslam/lcm/svslam_lcm_$t.h")
 done

@@ -20,10 +20,12 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "cli_helpers.hpp"
 #include "command_flood.hpp"
 #include "sanitizer_time_scale.hpp"
+#include "drivers/lcm/lcm_altitude.hpp"
 #include "drivers/lcm/lcm_messages.hpp"
 #include "drivers/lcm/lcm_transport.hpp"
 #include "svslam_lcm/command_status_t.hpp"
@@ -575,6 +577,81 @@ TEST(LcmPipeline, InnerCommandFloodIsCountedAndHarmless) {
 
 TEST(LcmPipeline, CommandFloodIsCountedAndHarmless) {
   runInNamespace("CommandFloodIsCountedAndHarmless");
+}
+
+// Monocular mode with the altimeter as its scale source (slam.mono_scale altitude): readings
+// sent on lcm.altitude_channel while the run goes (utime 0: before every frame) are received,
+// counted, and the two-view start takes its unit from them; a NaN reading and garbage on the
+// channel are rejected and counted, never used.
+TEST(LcmPipeline, InnerMonoStartTakesItsScaleFromTheAltimeter) {
+  if (!inner("MonoStartTakesItsScaleFromTheAltimeter"))
+    GTEST_SKIP() << "runs inside the namespace of MonoStartTakesItsScaleFromTheAltimeter";
+  const fs::path dir = fs::temp_directory_path() / ("svslam_lcmalt_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path cfg = dir / "svslam.yaml";
+  std::ofstream(cfg) << "slam:\n  mono_scale: altitude\n";
+  LcmParams p;
+  p.url = kUrl;
+  auto link = LcmLink::open(p);
+  ASSERT_TRUE(link.isOk()) << link.status().message();
+  std::vector<std::uint8_t> good, nan_reading;
+  auto wire = toLcm(AltitudeReading{0, 27.5, 0.1});
+  ASSERT_TRUE(wire.isOk()) << wire.status().message();
+  ASSERT_TRUE(encodeLcm(*wire, good).isOk());
+  svslam_lcm::altitude_t bad = *wire;
+  bad.altitude_m = std::nan("");
+  ASSERT_TRUE(encodeLcm(bad, nan_reading).isOk());
+  std::atomic<bool> stop{false};
+  std::thread tx([&] {  // 200 Hz, with one bad reading and one garbage message in ten
+    for (int k = 0; !stop.load(); ++k) {
+      if (k % 10 == 3) {
+        (void)(*link)->publishRaw(p.altitude_channel, nan_reading.data(), nan_reading.size());
+      } else if (k % 10 == 7) {
+        (void)(*link)->publishRaw(p.altitude_channel, "garbage", 7);
+      } else {
+        (void)(*link)->publishRaw(p.altitude_channel, good.data(), good.size());
+      }
+      std::this_thread::sleep_for(5ms);
+    }
+  });
+  const std::string run = std::string(SVSLAM_CLI) + " run --mode mono --config " + cfg.string() +
+                          " --source synthetic:width=320,height=240,frames=40 --rate 20"
+                          " --lcm-url '" +
+                          kUrl + "' --out " + (dir / "out").string() + " > " +
+                          (dir / "run_out.txt").string() + " 2>&1";
+  const int run_rc = std::system(run.c_str());
+  stop = true;
+  tx.join();
+  ASSERT_EQ(WEXITSTATUS(run_rc), 0) << slurp(dir / "run_out.txt");
+  const std::string stats = slurp(dir / "out" / "stats.json");
+  EXPECT_GT(jsonCount(stats, "altitude_readings"), 20) << stats;
+  EXPECT_GT(jsonCount(stats, "altitude_readings_rejected"), 2) << stats;
+  const long long start = jsonCount(stats, "mono_scale_from_altitude_frame");
+  EXPECT_GE(start, 1) << stats;
+  EXPECT_LT(start, 40) << stats;
+  EXPECT_EQ(jsonCount(stats, "frames_mono_initializing"), start) << stats;
+  fs::remove_all(dir);
+}
+
+TEST(LcmPipeline, MonoStartTakesItsScaleFromTheAltimeter) {
+  runInNamespace("MonoStartTakesItsScaleFromTheAltimeter");
+}
+
+// The altimeter is read on LCM: without it the run stops before it starts, naming the keys.
+TEST(LcmPipeline, AltitudeScaleWithoutLcmIsRefused) {
+  const fs::path dir = fs::temp_directory_path() / ("svslam_lcmalt0_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path cfg = dir / "svslam.yaml";
+  std::ofstream(cfg) << "slam:\n  mono_scale: altitude\n";
+  const int rc = test::runSvslam("run --mode mono --config " + cfg.string() +
+                                     " --source synthetic:width=320,height=240,frames=3 --out " +
+                                     (dir / "out").string(),
+                                 dir / "out.txt", dir / "err.txt");
+  const std::string err = slurp(dir / "err.txt");
+  EXPECT_NE(rc, 0);
+  EXPECT_NE(err.find("slam.mono_scale altitude"), std::string::npos) << err;
+  EXPECT_NE(err.find("lcm.enabled"), std::string::npos) << err;
+  fs::remove_all(dir);
 }
 
 // Commands enabled and the token file missing, empty or open to others: exit 1 before the run

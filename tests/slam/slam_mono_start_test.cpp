@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "drivers/source/stereo_source.hpp"
+#include "drivers/synthetic/synthetic_flight.hpp"
 #include "eval/trajectory_metrics.hpp"
 #include "slam/slam_system.hpp"
 
@@ -32,11 +33,16 @@ struct StartRun {
   std::vector<Matrix6d> cov;
   int initializing = 0, first_map = 0, bearing_added = 0, mono_frames = 0;
   bool initializing_after_start = false;  // a frame initializing after a pose was given
+  int start_frame = -1;                   // the frame of the two-view start
+  bool altitude_scaled = false;           // its unit from the altimeter
 };
 
 // The flight in monocular mode without a scale source; the right image given to the estimator
 // is black at every frame when `black_right` (the mode must never look at it).
-StartRun run(bool black_right, const SlamSystemParams& params = startParams()) {
+// With `altitude_from` >= 0 the altimeter's reading (the left camera's height above the ground
+// straight below it, from the rendered scene) is given from that frame on.
+StartRun run(bool black_right, const SlamSystemParams& params = startParams(),
+             int altitude_from = -1) {
   StartRun r;
   auto src = drivers::openStereoSource(spec());
   EXPECT_TRUE(src.isOk()) << src.status().message();
@@ -48,12 +54,17 @@ StartRun run(bool black_right, const SlamSystemParams& params = startParams()) {
   SerialExecutor ex;
   drivers::StereoFrame f;
   ImageU8 black;
+  const drivers::SyntheticFlight* flight = drivers::asSyntheticFlight(**src);
   for (int k = 0;; ++k) {
     auto more = (*src)->next(f);
     EXPECT_TRUE(more.isOk()) << more.status().message();
     if (!more || !*more) break;
     black.resize(f.right.width(), f.right.height());
     black.fill(0);
+    if (altitude_from >= 0 && k >= altitude_from && flight) {
+      const Eigen::Vector3d c = flight->pose(f.index).translation();
+      slam.estimator().setAltitude(c.z() - flight->heightAt(c.x(), c.y()));
+    }
     SlamFrameResult out;
     const Status s = slam.process(f.left.cview(), black_right ? black.cview() : f.right.cview(),
                                   out, ex);
@@ -65,6 +76,8 @@ StartRun run(bool black_right, const SlamSystemParams& params = startParams()) {
       r.initializing_after_start = r.initializing_after_start || r.first_map > 0;
     } else if (r.first_map == 0) {
       r.first_map = out.added;
+      r.start_frame = k;
+      r.altitude_scaled = out.altitude_scaled;
     }
     r.est.push_back(out.T_world_cam);
     r.cov.push_back(out.pose_cov);
@@ -139,6 +152,36 @@ TEST_F(MonoStart, RightImageIsNeverUsed) {
     ASSERT_TRUE(a.est[k].matrix() == b.est[k].matrix()) << "frame " << k;
     ASSERT_TRUE(a.cov[k] == b.cov[k]) << "frame " << k;
   }
+}
+
+// slam.mono_scale altitude: the start waits for the altimeter (given from frame 5), then takes
+// its unit from it: a metric map without a stereo pair. The reading is the height straight
+// below the camera; the start scales the height above the plane fitted to the points in view
+// (the terrain's relief, +-3 m at 25-30 m, is the difference).
+TEST(MonoStartAltitude, MetricMapFromTheAltimeterWithoutAStereoPair) {
+  if (spec().rfind("synthetic", 0) != 0) GTEST_SKIP() << "the altimeter is simulated from the rendered scene";
+  SlamSystemParams p = startParams();
+  p.mono_scale = MonoScaleSource::kAltitude;
+  const StartRun r = run(false, p, 5);
+  ASSERT_EQ(r.est.size(), 100u);
+  ASSERT_EQ(r.gt.size(), 100u);
+  EXPECT_EQ(r.start_frame, 5);  // the first frame with the altitude known (two views by then)
+  EXPECT_TRUE(r.altitude_scaled);
+  TrajectoryEvalParams ep;
+  ep.segment_lengths_m = {10};
+  ep.align = TrajectoryAlignment::kSe3;  // no scale fitted: the map must be metric
+  auto m = evaluateTrajectory(r.gt, r.est, ep);
+  ASSERT_TRUE(m.isOk()) << m.status().message();
+  ep.align = TrajectoryAlignment::kSim3;
+  auto m3 = evaluateTrajectory(r.gt, r.est, ep);
+  ASSERT_TRUE(m3.isOk()) << m3.status().message();
+  std::printf(
+      "mono start, altimeter from frame 5, %s: start at frame %d; ATE after SE(3) %.4f m = %.3f "
+      "%% of the %.1f m path, final error %.4f m; Sim(3) scale %.4f\n",
+      spec().c_str(), r.start_frame, m->ate_rmse_m, 100.0 * m->ate_rmse_m / m->path_length_m,
+      m->path_length_m, m->final_pos_err_m, m3->align_scale);
+  EXPECT_LE(m->ate_rmse_m, 0.01 * m->path_length_m);
+  EXPECT_NEAR(m3->align_scale, 1.0, 0.05);
 }
 
 // Bad two-view keys are named by their configuration keys.
