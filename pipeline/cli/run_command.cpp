@@ -276,8 +276,8 @@ int runPipeline(const std::vector<std::string>& args) {
   p.addOption("threads", "T", "worker threads inside the stereo stage (overrides the config)");
   p.addOption("mode", "ekf|vo|mono",
               "ekf: EKF SLAM over pose and landmarks; vo: pure visual odometry; mono: EKF SLAM "
-              "from the left camera, the first stereo pair giving the scale (overrides the "
-              "config; default ekf)");
+              "from the left camera, its scale from the first stereo pair, an altimeter on LCM "
+              "or none (slam.mono_scale) (overrides the config; default ekf)");
   p.addFlag("sequential", "run every stage on one thread (same outputs as the threaded run)");
   p.addOption("rate", "HZ",
               "replay a recorded source in real time at HZ frames per second (frames stamped as "
