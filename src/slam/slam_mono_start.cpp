@@ -1,8 +1,9 @@
-// SlamSystem, monocular mode without a scale source (slam_system.hpp, "Monocular mode"): the
-// two-view start. The reference frame is the world origin; its corners are tracked frame to
-// frame until TwoViewInitializer accepts the relative pose of the reference and the current
-// frame; the map is then made of the triangulated points, in the unit where their median depth
-// is mono_init_depth_m.
+// SlamSystem, monocular mode without a stereo pair (slam_system.hpp, "Monocular mode";
+// slam.mono_scale none or altitude): the two-view start. The reference frame is the world
+// origin; its corners are tracked frame to frame until TwoViewInitializer accepts the relative
+// pose of the reference and the current frame; the map is then made of the triangulated points,
+// in the unit where their median depth is mono_init_depth_m (none) or where the current camera's
+// height above their plane is the altimeter's reading (altitude).
 #include <algorithm>
 #include <cmath>
 

@@ -85,7 +85,10 @@
 // exact reference pose when sqrt(trace C) <= mono_init_max_rel_sigma times its depth, the most
 // precise first, at most max_per_cell per cell; the filter is put at the current frame's pose
 // with the monocular second frame's covariance (mono_start_*), and the next prediction is the
-// mean motion since the reference. Later frames are mono frames as above.
+// mean motion since the reference. With slam.mono_scale altitude the same start waits for an
+// altimeter reading (setAltitude) and scales the map so that the current camera's height above
+// the plane fitted to the points (least squares) is the reading: a metric map without a stereo
+// pair. Later frames are mono frames as above.
 // Memory: every per-frame buffer is a member sized in the constructor (or grown once to the
 // frame's stereo point count); the map's bookkeeping is preallocated for map_reserve landmarks.
 // Once warm, a frame allocates nothing while the map holds fewer than map_reserve landmarks

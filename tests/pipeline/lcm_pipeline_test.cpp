@@ -615,20 +615,21 @@ TEST(LcmPipeline, InnerMonoStartTakesItsScaleFromTheAltimeter) {
     }
   });
   const std::string run = std::string(SVSLAM_CLI) + " run --mode mono --config " + cfg.string() +
-                          " --source synthetic:width=320,height=240,frames=40 --rate 20"
-                          " --lcm-url '" +
+                          " --source synthetic:width=320,height=240,frames=20 --lcm-url '" +
                           kUrl + "' --out " + (dir / "out").string() + " > " +
                           (dir / "run_out.txt").string() + " 2>&1";
+  // Every frame is processed (no --rate: nothing dropped, also under the sanitizers' slowdown);
+  // the readings keep coming while the run goes.
   const int run_rc = std::system(run.c_str());
   stop = true;
   tx.join();
   ASSERT_EQ(WEXITSTATUS(run_rc), 0) << slurp(dir / "run_out.txt");
   const std::string stats = slurp(dir / "out" / "stats.json");
-  EXPECT_GT(jsonCount(stats, "altitude_readings"), 20) << stats;
-  EXPECT_GT(jsonCount(stats, "altitude_readings_rejected"), 2) << stats;
+  EXPECT_GT(jsonCount(stats, "altitude_readings"), 5) << stats;
+  EXPECT_GT(jsonCount(stats, "altitude_readings_rejected"), 0) << stats;
   const long long start = jsonCount(stats, "mono_scale_from_altitude_frame");
   EXPECT_GE(start, 1) << stats;
-  EXPECT_LT(start, 40) << stats;
+  EXPECT_LT(start, 20) << stats;
   EXPECT_EQ(jsonCount(stats, "frames_mono_initializing"), start) << stats;
   fs::remove_all(dir);
 }
