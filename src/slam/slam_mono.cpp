@@ -176,6 +176,17 @@ void SlamSystem::trackMonoCandidates(ImageView<const std::uint8_t> left, SlamFra
   }
 }
 
+void SlamSystem::strongestCornersFirst(const StereoStageOutput& stereo, std::vector<int>& order) {
+  order.clear();
+  for (std::size_t j = 0; j < stereo.corner_px.size(); ++j) order.push_back(static_cast<int>(j));
+  const bool have_resp = stereo.corner_resp.size() == stereo.corner_px.size();
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    const float ra = have_resp ? stereo.corner_resp[static_cast<std::size_t>(a)] : 0.0f,
+                rb = have_resp ? stereo.corner_resp[static_cast<std::size_t>(b)] : 0.0f;
+    return ra != rb ? ra > rb : a < b;
+  });
+}
+
 void SlamSystem::spawnMonoCandidates(ImageView<const std::uint8_t> left,
                                      const StereoStageOutput& stereo) {
   const int h = params_.patch_half_px, side = 2 * h + 1;
@@ -194,14 +205,7 @@ void SlamSystem::spawnMonoCandidates(ImageView<const std::uint8_t> left,
   if (free_slots == 0) return;
   // Strongest corners first (ties: ascending index).
   std::vector<int>& order = fresh_;
-  order.clear();
-  for (std::size_t j = 0; j < stereo.corner_px.size(); ++j) order.push_back(static_cast<int>(j));
-  const bool have_resp = stereo.corner_resp.size() == stereo.corner_px.size();
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
-    const float ra = have_resp ? stereo.corner_resp[static_cast<std::size_t>(a)] : 0.0f,
-                rb = have_resp ? stereo.corner_resp[static_cast<std::size_t>(b)] : 0.0f;
-    return ra != rb ? ra > rb : a < b;
-  });
+  strongestCornersFirst(stereo, order);
   const Eigen::Isometry3d T = ekf_.pose();
   const float min_d2 = static_cast<float>(4 * h * h);
   std::size_t slot = 0;

@@ -42,14 +42,7 @@ void SlamSystem::startReference(ImageView<const std::uint8_t> left,
   std::fill(cell_count_.begin(), cell_count_.end(), 0);
   // Strongest corners first (ties: ascending index), spread over the grid, 2 h px apart.
   std::vector<int>& order = fresh_;
-  order.clear();
-  for (std::size_t j = 0; j < stereo.corner_px.size(); ++j) order.push_back(static_cast<int>(j));
-  const bool have_resp = stereo.corner_resp.size() == stereo.corner_px.size();
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
-    const float ra = have_resp ? stereo.corner_resp[static_cast<std::size_t>(a)] : 0.0f,
-                rb = have_resp ? stereo.corner_resp[static_cast<std::size_t>(b)] : 0.0f;
-    return ra != rb ? ra > rb : a < b;
-  });
+  strongestCornersFirst(stereo, order);
   const float min_d2 = static_cast<float>(4 * h * h);
   for (const int j : order) {
     if (static_cast<int>(init_tracks_.size()) >= params_.mono_init_points) break;

@@ -192,6 +192,9 @@ class SlamSystem final : public Estimator {
   std::size_t gridCell(float u, float v) const;
   void applyObservations(SlamFrameResult& out, bool bearings);
   void trackMonoCandidates(ImageView<const std::uint8_t> left, SlamFrameResult& out);
+  // Indices of the stereo stage's left corners, strongest response first (ties: ascending
+  // index; all ties when the responses are absent), into `order`.
+  static void strongestCornersFirst(const StereoStageOutput& stereo, std::vector<int>& order);
   void spawnMonoCandidates(ImageView<const std::uint8_t> left, const StereoStageOutput& stereo);
   void selectLandmarks(ImageView<const std::uint8_t> left, SlamFrameResult& out);
   // Records first-frame candidate p (stereo point and patch of `left`) as an anchor of `track`.
