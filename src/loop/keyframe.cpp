@@ -7,18 +7,15 @@
 
 namespace svslam {
 
-Eigen::Matrix3d Keyframe::cov(std::size_t i) const {
-  const auto& c = cov_cam[i];
-  Eigen::Matrix3d m;
-  m << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
-  return m;
+StereoPoint Keyframe::point(std::size_t i) const {
+  return reprojectPixel(calib, uv_px[i].x(), uv_px[i].y(), disparity_px[i], sigma_d_px[i],
+                        matching_error_px);
 }
 
 std::size_t Keyframe::bytes() const {
   return sizeof(Keyframe) + descriptors.capacity() * sizeof(OrbDescriptor) +
-         p_cam.capacity() * sizeof(Eigen::Vector3f) +
-         cov_cam.capacity() * sizeof(std::array<float, 6>) +
-         uv_px.capacity() * sizeof(Eigen::Vector2f) + bow.capacity() * sizeof(bow[0]);
+         uv_px.capacity() * sizeof(Eigen::Vector2f) + disparity_px.capacity() * sizeof(float) +
+         sigma_d_px.capacity() * sizeof(float) + bow.capacity() * sizeof(bow[0]);
 }
 
 OrbParams KeyframeParams::defaultOrb() {
@@ -81,7 +78,7 @@ KeyframeBuilder::KeyframeBuilder(const KeyframeParams& params, const StereoCalib
 // from its 4 neighbouring pixels (all valid, disparities within 1 px of each other: not across
 // a depth edge), reprojected with the keypoint's matching error.
 bool KeyframeBuilder::subpixelPoint(const DisparityResult& dense, float u_px, float v_px,
-                                    StereoPoint& out) const {
+                                    float& d_px, float& sigma_d_px, StereoPoint& out) const {
   const int x0 = static_cast<int>(std::floor(u_px)), y0 = static_cast<int>(std::floor(v_px));
   if (x0 < 0 || y0 < 0 || x0 + 1 >= dense.disparity_px.width() ||
       y0 + 1 >= dense.disparity_px.height())
@@ -101,6 +98,8 @@ bool KeyframeBuilder::subpixelPoint(const DisparityResult& dense, float u_px, fl
     dd += w[i] * d[i];
     ss += w[i] * s[i];
   }
+  d_px = dd;
+  sigma_d_px = ss;
   out = reprojectPixel(calib_, u_px, v_px, dd, ss, params_.matching_error_px);
   return out.p_cam.allFinite() && out.cov.allFinite();
 }
@@ -136,30 +135,30 @@ Status KeyframeBuilder::process(ImageView<const std::uint8_t> left, const Dispar
     for (const auto& ri : rank_index) order.push_back(ri.second);
   }
   out.descriptors.clear();
-  out.p_cam.clear();
-  out.cov_cam.clear();
   out.uv_px.clear();
+  out.disparity_px.clear();
+  out.sigma_d_px.clear();
+  out.calib = calib_;
+  out.matching_error_px = params_.matching_error_px;
   out.bow.clear();
   depths_.clear();
   const std::size_t max_points = static_cast<std::size_t>(params_.max_points);
   out.descriptors.reserve(max_points);
-  out.p_cam.reserve(max_points);
-  out.cov_cam.reserve(max_points);
   out.uv_px.reserve(max_points);
+  out.disparity_px.reserve(max_points);
+  out.sigma_d_px.reserve(max_points);
   for (int i : order) {
     if (out.descriptors.size() >= max_points) break;
     const OrbKeypoint& k = kp_[static_cast<std::size_t>(i)];
     StereoPoint p;
-    if (!subpixelPoint(dense, k.x_px, k.y_px, p)) continue;
+    float d_px = 0, sigma_d_px = 0;
+    if (!subpixelPoint(dense, k.x_px, k.y_px, d_px, sigma_d_px, p)) continue;
     if (!p.p_cam.allFinite() || !p.cov.allFinite() || !(p.p_cam.z() > 0)) continue;
     if (std::sqrt(p.cov.trace()) > params_.max_point_sigma_m) continue;
     out.descriptors.push_back(desc_[static_cast<std::size_t>(i)]);
-    out.p_cam.push_back(p.p_cam.cast<float>());
-    const Eigen::Matrix3d& c = p.cov;
-    out.cov_cam.push_back({static_cast<float>(c(0, 0)), static_cast<float>(c(0, 1)),
-                           static_cast<float>(c(0, 2)), static_cast<float>(c(1, 1)),
-                           static_cast<float>(c(1, 2)), static_cast<float>(c(2, 2))});
     out.uv_px.emplace_back(k.x_px, k.y_px);
+    out.disparity_px.push_back(d_px);
+    out.sigma_d_px.push_back(sigma_d_px);
     depths_.push_back(static_cast<float>(p.p_cam.z()));
   }
   if (out.descriptors.size() < 16)

@@ -17,9 +17,12 @@
 // reprojected (stereo/reprojection.hpp) with matching_error_px in the image plane (left camera
 // frame of the keyframe, m). At most max_points are kept, taken round-robin over the ORB
 // bucketing cells (strongest first in each), so they stay spread over the image.
-// Memory: 32 (descriptor) + 12 (point) + 24 (covariance, upper triangle as float) + 8
-// (pixel) = 76 bytes a point plus the BoW vector (8 bytes a word): 400 points and 400 words
-// take 33.6 kB (bytes() gives the figure of one keyframe).
+// Memory: a point keeps what it was measured from, 32 (descriptor) + 8 (sub-pixel position) +
+// 4 (interpolated disparity) + 4 (its sigma) = 48 bytes, and its 3D point and covariance are
+// reprojected from them on demand (point(i): the same reprojectPixel the builder checked them
+// with, in double precision, without 36 bytes a point). With the BoW vector
+// (8 bytes a word) 400 points and 400 words take 22.4 kB (bytes() gives the figure of one
+// keyframe).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
@@ -48,14 +51,20 @@ struct Keyframe {
   // Its covariance ([dtheta, dt], world frame) from the estimator (zero when it has none).
   Eigen::Matrix<double, 6, 6> pose_cov = Eigen::Matrix<double, 6, 6>::Zero();
   std::vector<OrbDescriptor> descriptors;
-  std::vector<Eigen::Vector3f> p_cam;              // m, left camera frame of this keyframe
-  std::vector<std::array<float, 6>> cov_cam;       // m^2: xx xy xz yy yz zz
-  std::vector<Eigen::Vector2f> uv_px;              // left image pixel
+  std::vector<Eigen::Vector2f> uv_px;              // left image pixel (keypoint, sub-pixel)
+  std::vector<float> disparity_px;                 // dense disparity interpolated there, px
+  std::vector<float> sigma_d_px;                   // its sigma, px
+  // What the points are reprojected with (the builder's calibration and matching error).
+  StereoCalibration calib;
+  double matching_error_px = 0.5;
   BowVector bow;                                   // filled by the place-recognition side
-  float median_depth_m = 0;                        // of p_cam's z
+  float median_depth_m = 0;                        // of the points' z
 
   std::size_t size() const { return descriptors.size(); }
-  Eigen::Matrix3d cov(std::size_t i) const;
+  // Point i in this keyframe's left camera frame (m) with its covariance (m^2), reprojected
+  // from (uv_px, disparity_px, sigma_d_px) with calib and matching_error_px. Precondition:
+  // i < size().
+  StereoPoint point(std::size_t i) const;
   // Heap bytes held (capacity of every vector) plus the object itself.
   std::size_t bytes() const;
 };
@@ -96,7 +105,8 @@ class KeyframeBuilder {
   Status process(ImageView<const std::uint8_t> left, const DisparityResult& dense, Keyframe& out);
 
  private:
-  bool subpixelPoint(const DisparityResult& dense, float u_px, float v_px, StereoPoint& out) const;
+  bool subpixelPoint(const DisparityResult& dense, float u_px, float v_px, float& d_px,
+                     float& sigma_d_px, StereoPoint& out) const;
   KeyframeParams params_;
   StereoCalibration calib_;
   Status init_status_;

@@ -77,9 +77,11 @@ Status LoopVerifier::process(const Keyframe& query, const Keyframe& candidate, L
   out = LoopConstraint{};
   out.query = query.id;
   out.candidate = candidate.id;
-  if (query.p_cam.size() != query.descriptors.size() ||
-      candidate.p_cam.size() != candidate.descriptors.size() ||
-      query.cov_cam.size() != query.size() || candidate.cov_cam.size() != candidate.size())
+  const auto consistent = [](const Keyframe& k) {
+    return k.uv_px.size() == k.size() && k.disparity_px.size() == k.size() &&
+           k.sigma_d_px.size() == k.size();
+  };
+  if (!consistent(query) || !consistent(candidate))
     return Status::invalidArgument("loop verifier: keyframe points and descriptors differ in count");
   std::vector<std::pair<int, int>> matches;
   matchDescriptors(query.descriptors, candidate.descriptors, params_.max_hamming,
@@ -91,11 +93,13 @@ Status LoopVerifier::process(const Keyframe& query, const Keyframe& candidate, L
   }
   pairs_.clear();
   for (const auto& [iq, ic] : matches) {
+    const StereoPoint c = candidate.point(static_cast<std::size_t>(ic));
+    const StereoPoint q = query.point(static_cast<std::size_t>(iq));
     PointPair p;
-    p.p_prev = candidate.p_cam[static_cast<std::size_t>(ic)].cast<double>();
-    p.cov_prev = candidate.cov(static_cast<std::size_t>(ic));
-    p.p_cur = query.p_cam[static_cast<std::size_t>(iq)].cast<double>();
-    p.cov_cur = query.cov(static_cast<std::size_t>(iq));
+    p.p_prev = c.p_cam;
+    p.cov_prev = c.cov;
+    p.p_cur = q.p_cam;
+    p.cov_cur = q.cov;
     pairs_.push_back(p);
   }
   const Status s = motion_.process(pairs_, result_);

@@ -58,6 +58,7 @@ struct Outcome {
   std::vector<Eigen::Isometry3d> corrected, online, truth;
   std::vector<std::int64_t> frames;
   LoopCloserStats stats;
+  std::size_t memory_bytes = 0, points = 0;  // the closer's, in all; points of every keyframe
 };
 
 // Keyframes every 3rd frame of two 60-frame laps over a 60 m loop; online poses chained from
@@ -102,6 +103,7 @@ Outcome run(const BinaryVocabulary& voc, double wrong_fraction = 0) {
     kf.t_ns = f.timeNs(i);
     kf.T_world_cam = T_online;
     EXPECT_TRUE(builder.process(l.cview(), d, kf).isOk());
+    o.points += kf.size();
     bool optimised = false;
     const Status s = closer.process(std::move(kf), cov, Z, optimised);
     EXPECT_TRUE(s.isOk()) << s.message();
@@ -114,6 +116,7 @@ Outcome run(const BinaryVocabulary& voc, double wrong_fraction = 0) {
   o.loops = closer.acceptedLoops();
   o.corrected = closer.correctedKeyframes();
   o.stats = closer.stats();
+  o.memory_bytes = closer.memoryBytes();
   return o;
 }
 
@@ -148,6 +151,14 @@ TEST(LoopCloserTest, SecondLapLoopsAreTrueAndRemoveTheDrift) {
   std::printf("keyframe ATE online %.3f m, corrected %.3f m, %zu loops\n", before, after,
               o.loops.size());
   EXPECT_LT(after, 0.5 * before);
+  // Memory in all (keyframes, inverted index, poses): at most 40 KiB a keyframe, and the same
+  // bound for full keyframes of 400 points (the per-point part scaled to 400).
+  const double kf = static_cast<double>(o.corrected.size());
+  const double per_point = static_cast<double>(o.memory_bytes) / static_cast<double>(o.points);
+  std::printf("loop closer memory %zu B for %zu keyframes, %.1f points each: %.0f B a keyframe\n",
+              o.memory_bytes, o.corrected.size(), o.points / kf, o.memory_bytes / kf);
+  EXPECT_LE(static_cast<double>(o.memory_bytes) / kf, 40.0 * 1024);
+  EXPECT_LE(per_point * 400.0, 40.0 * 1024);
   // Deterministic.
   const Outcome again = run(voc);
   ASSERT_EQ(again.corrected.size(), o.corrected.size());
