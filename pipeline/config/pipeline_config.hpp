@@ -44,6 +44,9 @@ struct FaultConfig {
   FaultStage stall_stage = FaultStage::kNone;  // the stage that sleeps once; kNone = no fault
   int stall_frame = 10;  // on the first frame whose capture sequence number is at least this
   int stall_ms = 2000;   // for this long, ms
+  // The estimator is reset before this frame (source index) as if the LCM `reset` command had
+  // arrived then; -1 = never.
+  int reset_frame = -1;
 };
 
 struct PipelineConfig {

@@ -72,6 +72,9 @@ ConfigSection faultSection() {
              "test hook: on the first frame whose capture sequence number is at least this"),
       number("stall_ms", SVSLAM_FIELD(pipeline.fault.stall_ms), 1, 600000, "ms",
              "test hook: how long the stage sleeps"),
+      number("reset_frame", SVSLAM_FIELD(pipeline.fault.reset_frame), -1, 100000000, "",
+             "test hook: the estimator is reset before this source frame, as by the LCM reset "
+             "command; -1 = never"),
   };
   return s;
 }

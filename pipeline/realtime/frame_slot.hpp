@@ -30,6 +30,9 @@ struct FrameSlot {
   Eigen::Isometry3d T_gt_first_cam = Eigen::Isometry3d::Identity();
   StereoStageOutput stereo;
   SlamFrameResult result;
+  // The estimator's world frame result is in: 0 from the start, +1 at every reset (set by the
+  // estimator stage).
+  int world_epoch = 0;
   FrameStamps stamps;
   bool failed = false;  // a stage failed on this frame or an earlier one: not published
 };

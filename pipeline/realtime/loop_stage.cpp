@@ -66,10 +66,27 @@ struct LoopStage::Impl {
   struct FrameLink {
     std::int64_t t_ns;
     int kf;
+    int world_epoch;
     Eigen::Quaternionf q;
     Eigen::Vector3f t;
   };
   std::vector<FrameLink> links;
+  // First frame of each world after the first (front-end thread; read after the run).
+  std::vector<std::int64_t> world_starts;
+  int last_world_epoch = 0;
+  // The world a frame was estimated in.
+  int worldOf(std::int64_t frame) const {
+    return static_cast<int>(std::upper_bound(world_starts.begin(), world_starts.end(), frame) -
+                            world_starts.begin());
+  }
+  // The keyframe whose correction applies to a frame of `world` whose last keyframe at or before
+  // it is k: k itself, or after a reset the new world's first keyframe (-1: none yet).
+  int keyframeForWorld(std::size_t k, int world) const {
+    const std::vector<Keyframe>& kfs = closer->keyframes();
+    if (kfs[k].world_epoch == world) return static_cast<int>(k);
+    if (k + 1 < kfs.size() && kfs[k + 1].world_epoch == world) return static_cast<int>(k + 1);
+    return -1;
+  }
   double vocabulary_load_ms = 0;
   int vocabulary_words = 0;
   std::int64_t frames_seen = 0;
@@ -78,6 +95,7 @@ struct LoopStage::Impl {
   // handed over), the back end (keyframes done, solutions) and the estimator (waits, takes).
   struct Solution {
     std::int64_t kf_frame;
+    int world_epoch;      // of the keyframe
     Eigen::Isometry3d C;  // T_corrected_K T_online_K^-1
     Matrix6d cov;         // of T_corrected_K, [dtheta, dt] world frame
   };
@@ -97,6 +115,7 @@ struct LoopStage::Impl {
   std::vector<Applied> applied;
   double feedback_wait_max_ms = 0;
   std::int64_t feedback_wait_timeouts = 0;
+  std::int64_t feedback_dropped_other_world = 0;  // solutions of a world before a reset
 
   void updateResolved() { resolved = pending.empty() ? last_front : pending.front() - 1; }
   // Covariance of the corrected pose of keyframe k through the newest accepted loop (header).
@@ -122,8 +141,8 @@ void LoopStage::Impl::keyframeDone(bool optimised) {
   if (!pending.empty()) pending.pop_front();
   if (optimised && cfg.loop_feedback && !closer->keyframes().empty()) {
     const std::size_t k = closer->keyframes().size() - 1;
-    solutions.push_back(
-        {closer->keyframes()[k].frame, keyframeCorrection(k), correctedCovariance(k)});
+    solutions.push_back({closer->keyframes()[k].frame, closer->keyframes()[k].world_epoch,
+                         keyframeCorrection(k), correctedCovariance(k)});
   }
   updateResolved();
   fb_cv.notify_all();
@@ -269,6 +288,11 @@ Status LoopStage::process(FrameSlot& slot) {
   LoopFrameInput in;
   in.frame = slot.frame.index;
   in.t_ns = slot.frame.t_ns;
+  in.world_epoch = slot.world_epoch;
+  if (slot.world_epoch != m.last_world_epoch) {
+    m.world_starts.push_back(slot.frame.index);
+    m.last_world_epoch = slot.world_epoch;
+  }
   in.T_world_cam = slot.result.T_world_cam;
   in.motion_valid = slot.result.odometry.tracked;
   in.T_cur_prev = slot.result.odometry.T_cur_prev;
@@ -283,7 +307,7 @@ Status LoopStage::process(FrameSlot& slot) {
                                 s.message());
   if (m.front->lastKeyframe() >= 0) {
     const Eigen::Isometry3d& T = m.front->chainFromLastKeyframe();
-    m.links.push_back({slot.frame.t_ns, m.front->lastKeyframe(),
+    m.links.push_back({slot.frame.t_ns, m.front->lastKeyframe(), slot.world_epoch,
                        Eigen::Quaternionf(Eigen::Quaterniond(T.linear()).cast<float>()),
                        T.translation().cast<float>()});
   }
@@ -313,12 +337,12 @@ void LoopStage::stopFeedback() {
   impl_->fb_cv.notify_all();
 }
 
-bool LoopStage::correctionBefore(std::int64_t frame, Eigen::Isometry3d& C_new_old,
-                                 Matrix6d& cov_world) {
+bool LoopStage::correctionBefore(std::int64_t frame, int world_epoch,
+                                 Eigen::Isometry3d& C_new_old, Matrix6d& cov_world) {
   Impl& m = *impl_;
   if (!m.cfg.loop_feedback || !m.started) return false;
   const std::int64_t delay = m.cfg.loop_feedback_delay_frames;
-  Impl::Solution due{-1, Eigen::Isometry3d::Identity(), Matrix6d::Zero()};
+  Impl::Solution due{-1, 0, Eigen::Isometry3d::Identity(), Matrix6d::Zero()};
   {
     std::unique_lock<std::mutex> lock(m.fb_mutex);
     if (m.wait_for_back_end && m.resolved < frame - delay && !m.fb_stop) {
@@ -332,7 +356,11 @@ bool LoopStage::correctionBefore(std::int64_t frame, Eigen::Isometry3d& C_new_ol
           std::max(m.feedback_wait_max_ms, static_cast<double>(steadyNowNs() - w0) * 1e-6);
     }
     while (!m.solutions.empty() && m.solutions.front().kf_frame + delay <= frame) {
-      due = m.solutions.front();  // the newest due solution supersedes older ones
+      // The newest due solution supersedes older ones; one of an older world is dropped.
+      if (m.solutions.front().world_epoch == world_epoch)
+        due = m.solutions.front();
+      else
+        ++m.feedback_dropped_other_world;
       m.solutions.pop_front();
     }
   }
@@ -352,8 +380,11 @@ bool LoopStage::Impl::frameCorrection(std::int64_t frame, Eigen::Isometry3d& M) 
   // The keyframe at or before `frame` (the first one for a frame before it).
   const auto it = std::upper_bound(kfs.begin(), kfs.end(), frame,
                                    [](std::int64_t f, const Keyframe& k) { return f < k.frame; });
-  const std::size_t k = it == kfs.begin() ? 0 : static_cast<std::size_t>(it - kfs.begin()) - 1;
-  M = keyframeCorrection(k) * appliedBetween(kfs[k].frame, frame).inverse();
+  const std::size_t k0 = it == kfs.begin() ? 0 : static_cast<std::size_t>(it - kfs.begin()) - 1;
+  const int k = keyframeForWorld(k0, worldOf(frame));
+  if (k < 0) return false;  // a new world with no keyframe yet
+  M = keyframeCorrection(static_cast<std::size_t>(k)) *
+      appliedBetween(kfs[static_cast<std::size_t>(k)].frame, frame).inverse();
   return true;
 }
 
@@ -402,6 +433,14 @@ Status LoopStage::finish(const std::vector<MapLandmark>& map) {
     Eigen::Isometry3d T;
     if (!m.closer->solved()) {
       T = traj->poses[i];  // no loop closed: the online trajectory
+    } else if (j < m.links.size() && m.links[j].t_ns == t &&
+               static_cast<std::size_t>(m.links[j].kf) < kf.size() &&
+               m.closer->keyframes()[static_cast<std::size_t>(m.links[j].kf)].world_epoch !=
+                   m.links[j].world_epoch) {
+      // After a reset, before the new world's first keyframe: that keyframe's correction.
+      const int k = m.keyframeForWorld(static_cast<std::size_t>(m.links[j].kf),
+                                       m.links[j].world_epoch);
+      T = k < 0 ? traj->poses[i] : m.keyframeCorrection(static_cast<std::size_t>(k)) * traj->poses[i];
     } else if (j < m.links.size() && m.links[j].t_ns == t &&
         static_cast<std::size_t>(m.links[j].kf) < kf.size()) {
       const std::size_t k = static_cast<std::size_t>(m.links[j].kf);
@@ -454,6 +493,8 @@ std::string LoopStage::json() const {
   o.add("feedback_max_translation_m", moved_m, 4);
   o.add("feedback_wait_max_ms", m.feedback_wait_max_ms, 1);
   o.add("feedback_wait_timeouts", m.feedback_wait_timeouts);
+  o.add("world_resets", st.world_resets);
+  o.add("feedback_dropped_other_world", m.feedback_dropped_other_world);
   double worst = 0;
   for (double v : m.solve_ms) worst = std::max(worst, v);
   o.add("back_end_max_ms", worst, 1);
@@ -485,7 +526,8 @@ Status LoopStage::init() {
       "loop.enabled: this build has no loop closing (Ceres was not found when it was built)");
 }
 Status LoopStage::process(FrameSlot&) { return Status::ok(); }
-bool LoopStage::correctionBefore(std::int64_t, Eigen::Isometry3d&, Eigen::Matrix<double, 6, 6>&) {
+bool LoopStage::correctionBefore(std::int64_t, int, Eigen::Isometry3d&,
+                                 Eigen::Matrix<double, 6, 6>&) {
   return false;
 }
 void LoopStage::correctionApplied(std::int64_t, const Eigen::Isometry3d&) {}

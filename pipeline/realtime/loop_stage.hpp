@@ -27,6 +27,10 @@
 // before the frame it was last seen (C_k B_s^-1, B_s the moves applied after f_k up to then);
 // the mapper re-places the elevation map with the same corrections (frameCorrection,
 // dem_optimized.tif: map_stage.hpp).
+// Resets: every frame carries the estimator's world_epoch; the front end starts a new world at
+// its first frame (loop_closer.hpp "Resets"), solutions for keyframes of an older world are
+// never fed back, and a frame of a new world before that world's first keyframe takes that
+// keyframe's correction (none when there is none yet).
 // Determinism: the back end sees every keyframe in order; replayed as fast as possible the
 // front end sees every frame and the estimator, before frame f, waits until the back end has
 // handled every keyframe made up to frame f - D, so which moves apply where does not depend on
@@ -67,7 +71,9 @@ class LoopStage {
   // (Estimator::applyLoopCorrection: the move C_new_old and the covariance of the corrected
   // pose) when a solution is due (feedback on). With setWaitForBackEnd(true) it first waits for
   // the back end (see Determinism above). Then correctionApplied() with what moved.
-  bool correctionBefore(std::int64_t frame, Eigen::Isometry3d& C_new_old,
+  // `world_epoch`: the estimator's world (FrameSlot::world_epoch); a solution made for a
+  // keyframe of another world (before a reset) is dropped, never applied.
+  bool correctionBefore(std::int64_t frame, int world_epoch, Eigen::Isometry3d& C_new_old,
                         Eigen::Matrix<double, 6, 6>& cov_world);
   void correctionApplied(std::int64_t frame, const Eigen::Isometry3d& moved);
   void setWaitForBackEnd(bool wait);

@@ -216,12 +216,17 @@ Status SlamStages::estimate(FrameSlot& slot) {
 }
 
 Status SlamStages::estimateFrame(FrameSlot& slot) {
-  if (reset_requested_.exchange(false)) {
+  const bool reset_hook = cfg_.pipeline.fault.reset_frame >= 0 &&
+                          slot.frame.index == cfg_.pipeline.fault.reset_frame;
+  if (reset_requested_.exchange(false) || reset_hook) {
     if (Status s = buildEstimator(); !s) return s;
+    ++world_epoch_;  // a new world frame: the camera at the identity
   }
+  slot.world_epoch = world_epoch_;
   Eigen::Isometry3d C_new_old, moved;
   Matrix6d cov_world;
-  if (loop_stage_ && loop_stage_->correctionBefore(slot.frame.index, C_new_old, cov_world)) {
+  if (loop_stage_ &&
+      loop_stage_->correctionBefore(slot.frame.index, world_epoch_, C_new_old, cov_world)) {
     if (Status s = estimator_->applyLoopCorrection(C_new_old, cov_world, moved); !s)
       return Status(s.code(), "frame " + std::to_string(slot.frame.index) + ": " + s.message());
     loop_stage_->correctionApplied(slot.frame.index, moved);

@@ -120,6 +120,7 @@ class SlamStages {
   std::unique_ptr<Clock> estimator_clock_;
   run::StageTimes estimator_times_;
   std::atomic<bool> reset_requested_{false};
+  int world_epoch_ = 0;  // estimator thread: resets so far (FrameSlot::world_epoch)
   std::int64_t next_map_ns_ = 0;
   std::mutex save_mutex_;
   std::string save_path_;

@@ -47,6 +47,11 @@ struct Keyframe {
   int id = -1;                  // 0, 1, 2, ... in order of creation
   std::int64_t frame = 0;       // source frame index
   std::int64_t t_ns = 0;        // source timestamp
+  // The estimator's world frame T_world_cam is in: 0 from the start, +1 at every reset of the
+  // estimator (a new world, the camera at the identity), and when that world began (t_ns of
+  // its first frame).
+  int world_epoch = 0;
+  std::int64_t world_since_t_ns = 0;
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // estimate at creation
   // Its covariance ([dtheta, dt], world frame) from the estimator (zero when it has none).
   Eigen::Matrix<double, 6, 6> pose_cov = Eigen::Matrix<double, 6, 6>::Zero();
@@ -88,6 +93,8 @@ class KeyframeSelector {
   bool isKeyframe(const Eigen::Isometry3d& T_world_cam) const;
   // The frame was made a keyframe whose points' median depth is median_depth_m.
   void accept(const Eigen::Isometry3d& T_world_cam, double median_depth_m);
+  // Forget the last keyframe: the next frame is one (a new world after a reset).
+  void reset() { has_last_ = false; }
 
  private:
   KeyframeParams params_;

@@ -46,11 +46,24 @@ Status LoopFrontEnd::process(const LoopFrameInput& in, bool& made, Keyframe& kf,
   if (!init_status_) return init_status_;
   if (!in.T_world_cam.matrix().allFinite())
     return Status::invalidArgument("loop front end: non-finite pose");
+  if (in.world_epoch < world_epoch_)
+    return Status::invalidArgument("loop front end: the world epoch went back");
+  const bool new_world = in.world_epoch != world_epoch_;
+  if (new_world) {
+    world_epoch_ = in.world_epoch;
+    world_since_t_ns_ = in.t_ns;
+    selector_.reset();  // the next frame with points is the new world's first keyframe
+  }
   // Chain this frame's motion onto T_kf_frame (see the header).
   if (next_id_ > 0) {
     Eigen::Isometry3d D;  // T_prev_cur
     Matrix6d C_D;
-    if (in.motion_valid && in.frame == last_frame_ + 1 && in.motion_cov.allFinite() &&
+    if (new_world) {  // between two worlds: no information
+      D = T_world_last_.inverse() * in.T_world_cam;
+      C_D.setZero();
+      C_D.diagonal().head<3>().setConstant(kResetRotSigmaRad * kResetRotSigmaRad);
+      C_D.diagonal().tail<3>().setConstant(kResetTransSigmaM * kResetTransSigmaM);
+    } else if (in.motion_valid && in.frame == last_frame_ + 1 && in.motion_cov.allFinite() &&
         in.T_cur_prev.matrix().allFinite()) {
       D = in.T_cur_prev.inverse();
       const Matrix6d J = inverseJacobian(in.T_cur_prev);
@@ -72,6 +85,8 @@ Status LoopFrontEnd::process(const LoopFrameInput& in, bool& made, Keyframe& kf,
   kf.id = next_id_;
   kf.frame = in.frame;
   kf.t_ns = in.t_ns;
+  kf.world_epoch = world_epoch_;
+  kf.world_since_t_ns = world_since_t_ns_;
   kf.T_world_cam = in.T_world_cam;
   kf.pose_cov = in.pose_cov;
   const Status s = builder_.process(in.left, *in.dense, kf);
@@ -148,10 +163,19 @@ Status LoopCloser::process(Keyframe&& kf, const Matrix6d& odo_cov,
     T_chain_.push_back(kf.T_world_cam);
   }
   T_online_.push_back(kf.T_world_cam);
+  const bool new_world = id > 0 && kf.world_epoch != keyframes_.back().world_epoch;
+  if (id > 0 && kf.world_epoch < keyframes_.back().world_epoch)
+    return Status::invalidArgument("loop closer: the world epoch went back");
+  if (new_world) {
+    gauge_ = id;
+    ++stats_.world_resets;
+  }
   // Before any solution the online estimate; after one, chained onto the last corrected
-  // keyframe by the motion chain until the next solution.
-  T_corrected_.push_back(id == 0 || !solved_ ? kf.T_world_cam
-                                             : Eigen::Isometry3d(T_corrected_.back() * odo_T_.back()));
+  // keyframe by the motion chain until the next solution; a new world's first keyframe is its
+  // gauge: where the online estimate puts it.
+  T_corrected_.push_back(id == 0 || !solved_ || new_world
+                             ? kf.T_world_cam
+                             : Eigen::Isometry3d(T_corrected_.back() * odo_T_.back()));
   keyframes_.push_back(std::move(kf));
   const Keyframe& q = keyframes_.back();
   ++stats_.keyframes;
@@ -287,7 +311,7 @@ Status LoopCloser::optimise() {
   const int n = static_cast<int>(poses.size());
   const int first_free =
       params_.max_solve_keyframes > 0 ? std::max(0, n - params_.max_solve_keyframes) : 0;
-  if (Status s = graph_.optimize(poses, edges, 0, rep, first_free); !s) return s;
+  if (Status s = graph_.optimize(poses, edges, gauge_, rep, first_free); !s) return s;
   T_corrected_ = poses;
   solved_ = true;
   pending_ = false;
@@ -313,6 +337,8 @@ Eigen::Isometry3d LoopCloser::correctionAt(std::int64_t t_ns) const {
   const std::size_t k =
       it == keyframes_.begin() ? 0 : static_cast<std::size_t>(it - keyframes_.begin()) - 1;
   if (k + 1 >= keyframes_.size() || keyframes_[k].t_ns >= t_ns) return corr(k);
+  if (keyframes_[k + 1].world_epoch != keyframes_[k].world_epoch)  // a reset in between
+    return t_ns >= keyframes_[k + 1].world_since_t_ns ? corr(k + 1) : corr(k);
   const double a = static_cast<double>(t_ns - keyframes_[k].t_ns) /
                    static_cast<double>(keyframes_[k + 1].t_ns - keyframes_[k].t_ns);
   const Eigen::Isometry3d c0 = corr(k), c1 = corr(k + 1);

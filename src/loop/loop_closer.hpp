@@ -12,7 +12,10 @@
 //     D = M^-1, C_D = J_inv C_M J_inv^T,   Z' = Z D,   C' = A_1 C A_1^T + A_2 C_D A_2^T
 //   (loop/relative_pose.hpp's inversion and product Jacobians); a frame without a motion
 //   estimate, or after frames this front end did not see, contributes the online estimate's
-//   relative pose with gap_rot_sigma_rad / gap_trans_sigma_m; plus a floor of
+//   relative pose with gap_rot_sigma_rad / gap_trans_sigma_m; the first frame after a reset of
+//   the estimator (a new world_epoch: its world frame starts again at the camera) contributes
+//   the online relative pose between the two worlds' poses with kResetRotSigmaRad /
+//   kResetTransSigmaM, i.e. nothing, and is made a keyframe (when it has the points); plus a floor of
 //   odometry_floor_rot_rad^2 / odometry_floor_trans_m^2 per keyframe edge (the filter's
 //   relative pose is not exactly the motion chain's, and a skipped frame adds nothing).
 //
@@ -30,8 +33,17 @@
 //     clique is accepted when it has
 //     at least min_consistent_loops members (a lone look-alike is never enough);
 //  4. when the accepted set gained a member: the pose graph (loop/pose_graph.hpp; odometry edges
-//     between consecutive keyframes, loop edges with the robust loss, keyframe 0 fixed) is
-//     solved, warm-started from the last solution (new keyframes chained on by odometry).
+//     between consecutive keyframes, loop edges with the robust loss, the first keyframe of the
+//     newest world_epoch fixed: keyframe 0 until the estimator is reset) is solved, warm-started
+//     from the last solution (new keyframes chained on by odometry).
+//  Resets (reconciled with the estimator's new world): the gauge is the current world's first
+//  keyframe, so the current world's corrections stay drift corrections (the estimator's
+//  feedback never moves it into an older world) and the earlier worlds' keyframes are solved
+//  into the current world: tied by the uninformative edge alone they keep the shape of their
+//  last solution, placed as the online estimates left them; once loops join the new world to
+//  places seen before the reset (found, verified and PCM-checked as any other: two loops across
+//  the reset must agree with each other through the odometry on both sides), the whole earlier
+//  trajectory is moved into the current world.
 //  correctedKeyframes() then holds T_world_kf after the last solution (the online estimates
 //  before any); correctionAt() maps an online pose at any time into the corrected frame.
 #include <Eigen/Core>
@@ -96,6 +108,7 @@ struct LoopCloserParams {
 struct LoopFrameInput {
   std::int64_t frame = 0;
   std::int64_t t_ns = 0;
+  int world_epoch = 0;  // the estimator's world (Keyframe::world_epoch); never decreases
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // online estimate
   bool motion_valid = false;  // the front end estimated T_cur_prev for this frame
   Eigen::Isometry3d T_cur_prev = Eigen::Isometry3d::Identity();
@@ -131,7 +144,15 @@ class LoopFrontEnd {
   Matrix6d C_kf_frame_ = Matrix6d::Zero();
   std::int64_t last_frame_ = -1;
   Eigen::Isometry3d T_world_last_ = Eigen::Isometry3d::Identity();  // online, last frame seen
+  int world_epoch_ = 0;
+  std::int64_t world_since_t_ns_ = 0;
 };
+
+// The odometry edge across a reset of the estimator: standard deviations that make it carry
+// no information next to any other edge (a pose graph needs the graph connected, not this
+// edge's value), rad / m.
+inline constexpr double kResetRotSigmaRad = 10.0;
+inline constexpr double kResetTransSigmaM = 1e4;
 
 struct AcceptedLoop {
   int query = -1, candidate = -1;  // keyframe ids
@@ -157,6 +178,7 @@ struct LoopCloserStats {
   int chain_edges = 0;  // odometry edges taken from the motion chain (the filter disagreed)
   int injected_wrong = 0;           // wrong constraints made by the test hook
   int injected_wrong_accepted = 0;  // of those, in the accepted set
+  int world_resets = 0;  // keyframes that began a new world_epoch (the estimator was reset)
 };
 
 class LoopCloser {
@@ -187,7 +209,9 @@ class LoopCloser {
   const Eigen::Isometry3d& onlineKeyframe(std::size_t k) const { return T_online_[k]; }
   // The correction C (T_corrected = C T_online, world frame) of the online pose at time t_ns:
   // C_k = T_corrected_kf_k T_online_kf_k^-1, interpolated between the keyframes around t_ns
-  // (rotation slerp, translation lerp, by time); identity before any solution. O(log N).
+  // (rotation slerp, translation lerp, by time; not across a reset: a time at or after the
+  // newer world's start takes its first keyframe's correction); identity before any solution.
+  // O(log N).
   Eigen::Isometry3d correctionAt(std::int64_t t_ns) const;
   const std::vector<AcceptedLoop>& acceptedLoops() const { return accepted_; }
   const LoopCloserStats& stats() const { return stats_; }
@@ -221,6 +245,7 @@ class LoopCloser {
   LoopCloserStats stats_;
   std::mt19937 wrong_rng_;     // the wrong_loop_fraction test hook's draws
   std::vector<std::pair<int, int>> injected_;  // (query, candidate) of the injected constraints
+  int gauge_ = 0;              // the fixed keyframe: the first of the newest world_epoch
   bool pending_ = false;       // accepted loops not yet in a solution
   int solved_keyframes_ = 0;   // keyframes at the last solution
 };
