@@ -28,7 +28,8 @@ Status LcmParams::validate() const {
     return Status::invalidArgument("LCM URL '" + url +
                                    "' has no provider (use udpm://..., memq:// or file://...)");
   for (const auto* ch : {&pose_channel, &stats_channel, &map_channel, &map_tile_channel,
-                         &correction_channel, &command_channel, &status_channel, &altitude_channel})
+                         &map_tile_optimized_channel, &correction_channel, &command_channel,
+                         &status_channel, &altitude_channel})
     if (Status s = validateChannelName(*ch); !s) return s;
   if (command_channel == status_channel || command_channel == pose_channel)
     return Status::invalidArgument("LCM command channel must differ from the other channels");

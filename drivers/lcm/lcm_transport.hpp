@@ -45,6 +45,8 @@ struct LcmParams {
   std::string stats_channel = "SVSLAM_STATS";
   std::string map_channel = "SVSLAM_MAP";
   std::string map_tile_channel = "SVSLAM_MAP_TILE";
+  // The elevation map re-placed after loop-closing corrections (map_tile_t, docs/lcm.md).
+  std::string map_tile_optimized_channel = "SVSLAM_MAP_TILE_OPTIMIZED";
   std::string correction_channel = "SVSLAM_POSE_CORRECTION";
   std::string command_channel = "SVSLAM_COMMAND";
   std::string status_channel = "SVSLAM_COMMAND_STATUS";

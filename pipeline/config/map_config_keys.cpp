@@ -113,6 +113,10 @@ ConfigSection mapConfigSection() {
       geoOriginKey(),
       number("publish_period_s", SVSLAM_FIELD(map_publish_period_s), 0.01, 3600, "s",
              "tiles changed since the last period go to lcm.map_tile_channel every this many s"),
+      number("replace_period_s", SVSLAM_FIELD(map_replace_period_s), 0, 86400, "s",
+             "with loop closing: after a new solution the map is re-placed during the flight "
+             "(lcm.map_tile_optimized_channel, save_map) at most every this many s; 0 = at the "
+             "end of the run only"),
   };
   return s;
 }

@@ -93,6 +93,9 @@ ConfigSection lcmSection() {
            "svslam_lcm.map_summary_t, every stats_period_s (ekf mode)"),
       text("map_tile_channel", SVSLAM_FIELD(lcm.params.map_tile_channel),
            "svslam_lcm.map_tile_t, the elevation map tiles changed, every map.publish_period_s"),
+      text("map_tile_optimized_channel", SVSLAM_FIELD(lcm.params.map_tile_optimized_channel),
+           "svslam_lcm.map_tile_t, the whole elevation map re-placed after loop-closing "
+           "corrections (loop.enabled), at most every map.replace_period_s"),
       text("correction_channel", SVSLAM_FIELD(lcm.params.correction_channel),
            "svslam_lcm.pose_correction_t, after each loop closure (loop.enabled)"),
       text("command_channel", SVSLAM_FIELD(lcm.params.command_channel),

@@ -55,6 +55,9 @@ struct RunConfig {
   // altitude in metres) for georeferenced outputs; nullopt: the map stays in local metres.
   std::optional<std::array<double, 3>> map_geo_origin;
   double map_publish_period_s = 1.0;  // map tiles changed since the last period go to LCM, s
+  // With loop closing: after a new solution, the map is re-placed during the flight at most
+  // this often (MapStage::replaceLive), s; 0 = only at the end of the run.
+  double map_replace_period_s = 10.0;
   // loop.*: loop closing (src/loop/loop_closer.hpp): keyframes, place recognition with the
   // vocabulary file loop_vocabulary (`svslam train-vocabulary`), verification, PCM, pose graph.
   bool loop_enabled = false;

@@ -1,6 +1,9 @@
 #include "pipeline/realtime/loop_stage.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <functional>
+#include <memory>
 #include <cstdio>
 #include <limits>
 
@@ -87,6 +90,36 @@ struct LoopStage::Impl {
     if (k + 1 < kfs.size() && kfs[k + 1].world_epoch == world) return static_cast<int>(k + 1);
     return -1;
   }
+  // The corrections of the last solution (written by the back end after each solve, read by
+  // the mapper during the run and by finish after it): per keyframe its frame, world and
+  // correction T_corrected_k T_online_k^-1.
+  struct Snapshot {
+    std::vector<std::int64_t> frame;
+    std::vector<int> world;
+    std::vector<Eigen::Isometry3d> C;
+  };
+  std::mutex snap_mutex;
+  std::shared_ptr<const Snapshot> snapshot;
+  std::atomic<int> solutions_made{0};
+  void takeSnapshot(bool new_solution) {
+    auto snap = std::make_shared<Snapshot>();
+    const std::vector<Keyframe>& kfs = closer->keyframes();
+    snap->frame.reserve(kfs.size());
+    snap->world.reserve(kfs.size());
+    snap->C.reserve(kfs.size());
+    for (std::size_t k = 0; k < kfs.size(); ++k) {
+      snap->frame.push_back(kfs[k].frame);
+      snap->world.push_back(kfs[k].world_epoch);
+      snap->C.push_back(keyframeCorrection(k));
+    }
+    std::lock_guard<std::mutex> lock(snap_mutex);
+    snapshot = std::move(snap);
+    if (new_solution) ++solutions_made;
+  }
+  std::shared_ptr<const Snapshot> latestSnapshot() {
+    std::lock_guard<std::mutex> lock(snap_mutex);
+    return snapshot;
+  }
   double vocabulary_load_ms = 0;
   int vocabulary_words = 0;
   std::int64_t frames_seen = 0;
@@ -128,7 +161,10 @@ struct LoopStage::Impl {
   Eigen::Isometry3d keyframeCorrection(std::size_t k) const {
     return closer->correctedKeyframes()[k] * closer->keyframes()[k].T_world_cam.inverse();
   }
-  // LoopStage::frameCorrection (header).
+  // LoopStage::frameCorrection (header), from a solution's corrections and the moves applied.
+  bool frameCorrection(const Snapshot& snap, const std::vector<Applied>& moves,
+                       std::int64_t frame, Eigen::Isometry3d& M) const;
+  // The same from the last solution (after the run).
   bool frameCorrection(std::int64_t frame, Eigen::Isometry3d& M) const;
   Status writeLandmarks(const std::vector<MapLandmark>& map) const;
 
@@ -192,6 +228,8 @@ void LoopStage::Impl::backEnd() {
       if (error.isOk()) {
         const std::int64_t t0 = steadyNowNs();
         if (Status s = closer->finish(optimised); !s) error = s;
+        // The end state (keyframes since the last solution chained onto it) for finish().
+        if (error.isOk() && closer->solved()) takeSnapshot(optimised);
         if (optimised) {
           solve_ms.push_back(static_cast<double>(steadyNowNs() - t0) * 1e-6);
           if (lcm && !closer->keyframes().empty()) publishCorrection(closer->keyframes().back());
@@ -213,6 +251,7 @@ void LoopStage::Impl::backEnd() {
         optimised = false;
       } else if (optimised) {
         solve_ms.push_back(static_cast<double>(steadyNowNs() - t0) * 1e-6);
+        takeSnapshot(true);
         if (lcm) publishCorrection(closer->keyframes().back());
       }
     }
@@ -371,21 +410,35 @@ bool LoopStage::correctionBefore(std::int64_t frame, int world_epoch,
 }
 
 void LoopStage::correctionApplied(std::int64_t frame, const Eigen::Isometry3d& moved) {
+  std::lock_guard<std::mutex> lock(impl_->fb_mutex);  // the mapper copies it (frameCorrections)
   impl_->applied.push_back({frame, moved});
 }
 
-bool LoopStage::Impl::frameCorrection(std::int64_t frame, Eigen::Isometry3d& M) const {
-  if (!closer || !closer->solved() || closer->keyframes().empty()) return false;
-  const std::vector<Keyframe>& kfs = closer->keyframes();
+bool LoopStage::Impl::frameCorrection(const Snapshot& snap, const std::vector<Applied>& moves,
+                                      std::int64_t frame, Eigen::Isometry3d& M) const {
+  if (snap.frame.empty()) return false;
   // The keyframe at or before `frame` (the first one for a frame before it).
-  const auto it = std::upper_bound(kfs.begin(), kfs.end(), frame,
-                                   [](std::int64_t f, const Keyframe& k) { return f < k.frame; });
-  const std::size_t k0 = it == kfs.begin() ? 0 : static_cast<std::size_t>(it - kfs.begin()) - 1;
-  const int k = keyframeForWorld(k0, worldOf(frame));
-  if (k < 0) return false;  // a new world with no keyframe yet
-  M = keyframeCorrection(static_cast<std::size_t>(k)) *
-      appliedBetween(kfs[static_cast<std::size_t>(k)].frame, frame).inverse();
+  const auto it = std::upper_bound(snap.frame.begin(), snap.frame.end(), frame);
+  const std::size_t k0 =
+      it == snap.frame.begin() ? 0 : static_cast<std::size_t>(it - snap.frame.begin()) - 1;
+  // After a reset, before the new world's first keyframe: that keyframe (none yet: no
+  // correction).
+  const int world = worldOf(frame);
+  std::size_t k = k0;
+  if (snap.world[k0] != world) {
+    if (k0 + 1 >= snap.frame.size() || snap.world[k0 + 1] != world) return false;
+    k = k0 + 1;
+  }
+  // The moves applied at frames in (f_k, frame], composed: Delta_m ... Delta_1.
+  Eigen::Isometry3d B = Eigen::Isometry3d::Identity();
+  for (const Applied& a : moves)
+    if (a.frame > snap.frame[k] && a.frame <= frame) B = a.delta * B;
+  M = snap.C[k] * B.inverse();
   return true;
+}
+
+bool LoopStage::Impl::frameCorrection(std::int64_t frame, Eigen::Isometry3d& M) const {
+  return snapshot && frameCorrection(*snapshot, applied, frame, M);
 }
 
 Status LoopStage::Impl::writeLandmarks(const std::vector<MapLandmark>& map) const {
@@ -465,6 +518,24 @@ bool LoopStage::frameCorrection(std::int64_t frame, Eigen::Isometry3d& M) const 
   return impl_->frameCorrection(frame, M);
 }
 
+int LoopStage::solutionsMade() const { return impl_->solutions_made.load(); }
+
+bool LoopStage::liveFrameCorrections(
+    std::function<bool(std::int64_t, Eigen::Isometry3d&)>& out) const {
+  Impl& m = *impl_;
+  std::shared_ptr<const Impl::Snapshot> snap = m.latestSnapshot();
+  if (!snap) return false;
+  auto moves = std::make_shared<std::vector<Impl::Applied>>();
+  {
+    std::lock_guard<std::mutex> lock(m.fb_mutex);
+    *moves = m.applied;
+  }
+  out = [&m, snap, moves](std::int64_t frame, Eigen::Isometry3d& M) {
+    return m.frameCorrection(*snap, *moves, frame, M);
+  };
+  return true;
+}
+
 std::string LoopStage::json() const {
   const Impl& m = *impl_;
   cli::JsonObject o;
@@ -535,6 +606,10 @@ void LoopStage::setWaitForBackEnd(bool) {}
 void LoopStage::stopFeedback() {}
 Status LoopStage::finish(const std::vector<MapLandmark>&) { return Status::ok(); }
 bool LoopStage::frameCorrection(std::int64_t, Eigen::Isometry3d&) const { return false; }
+int LoopStage::solutionsMade() const { return 0; }
+bool LoopStage::liveFrameCorrections(std::function<bool(std::int64_t, Eigen::Isometry3d&)>&) const {
+  return false;
+}
 std::string LoopStage::json() const { return "{}"; }
 
 #endif

@@ -39,6 +39,7 @@
 #include <Eigen/Geometry>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
@@ -87,6 +88,12 @@ class LoopStage {
   // at or before that frame, less the feedback moves applied after it up to the frame. False
   // when no loop was closed (nothing to correct).
   bool frameCorrection(std::int64_t frame, Eigen::Isometry3d& M) const;
+  // Mapper thread, during the run: the number of solutions the back end has made so far, and a
+  // function giving frameCorrection's answer for the newest of them (the moves the estimator
+  // applied up to now included; a copy: safe while the back end goes on). False: no solution
+  // yet.
+  int solutionsMade() const;
+  bool liveFrameCorrections(std::function<bool(std::int64_t, Eigen::Isometry3d&)>& out) const;
   // stats.json's "loop" object.
   std::string json() const;
   const run::StageTimes& times() const { return times_; }

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
+#include <utility>
 
 #include "drivers/files/dem_files.hpp"
 #include "drivers/lcm/lcm_map_tile.hpp"
@@ -12,6 +14,20 @@
 #include "pipeline/run/run_outputs.hpp"
 
 namespace svslam::rt {
+namespace {
+// Tile (ti, tj) with no data (what a listener replaces a tile that is no longer there with).
+void emptyTile(const map::DemParams& p, int ti, int tj, map::DemRaster& out) {
+  const int n = p.tile_cells;
+  out.cell_m = p.cell_m;
+  out.i0 = ti * n;
+  out.j0 = tj * n;
+  if (out.cols != n || out.rows != n) out.resize(n, n);
+  std::fill(out.height_m.begin(), out.height_m.end(), NAN);
+  std::fill(out.sigma_m.begin(), out.sigma_m.end(), NAN);
+  std::fill(out.count.begin(), out.count.end(), 0.0f);
+  std::fill(out.luminance.begin(), out.luminance.end(), std::uint8_t{0});
+}
+}  // namespace
 
 MapStage::MapStage(const config::RunConfig& cfg, drivers::StereoSource& source, std::string out_dir,
                    drivers::LcmLink* lcm)
@@ -105,7 +121,11 @@ void MapStage::applySave(std::int64_t t_ns) {
     dir = save_dir_.empty() ? out_dir_ : save_dir_;
     prefix = save_prefix_;
   }
-  const Status ws = writeFiles(dir);
+  Status ws = writeFiles(dir);
+  if (ws) {
+    std::lock_guard<std::mutex> lock(replaced_mutex_);
+    if (replaced_) ws = writeReplacedFiles(*replaced_, dir);
+  }
   if (!lcm_) return;
   drivers::CommandStatus cs;
   cs.t_ns = t_ns;
@@ -149,30 +169,18 @@ Status MapStage::finish() {
   return writeFiles(out_dir_);
 }
 
-Status MapStage::writeReplaced(
-    const std::function<bool(std::int64_t, Eigen::Isometry3d&)>& correction) {
+Status MapStage::replace(const std::function<bool(std::int64_t, Eigen::Isometry3d&)>& correction,
+                         map::DemMap& out, bool& any) {
+  any = false;
   if (!map_ || !map_->params().keep_cell_sources) return Status::ok();
   std::vector<Eigen::Isometry3d> C(fused_frames_.size(), Eigen::Isometry3d::Identity());
-  bool any = false;
   for (std::size_t s = 0; s < C.size(); ++s) any = correction(fused_frames_[s], C[s]) || any;
   if (!any) return Status::ok();
   const std::int64_t t0 = steadyNowNs();
   map::DemReplacer replacer(map::DemReplacerParams{}, R_map_world_);
-  map::DemParams out_params = map_->params();
-  out_params.keep_cell_sources = false;
-  map::DemMap out(out_params);
   map::DemReplaceStats st;
   if (Status s = replacer.process(*map_, C, out, st); !s)
     return Status(s.code(), "map re-placement: " + s.message());
-  map::DemRaster r;
-  if (Status s = out.toRaster(r); !s) return Status(s.code(), "map re-placement: " + s.message());
-  drivers::GeoOrigin geo;
-  const drivers::GeoOrigin* g = geoOrigin(geo);
-  const std::string dir = out_dir_ + "/";
-  if (Status s = drivers::writeDemGeoTiff(dir + run::files::kDemOptimized, r, g); !s) return s;
-  if (Status s = drivers::writeOrthoTiff(dir + run::files::kOrthoOptimizedTiff, r, g); !s)
-    return s;
-  if (Status s = drivers::writeOrthoPng(dir + run::files::kOrthoOptimizedPng, r); !s) return s;
   cli::JsonObject j;
   j.add("cells_in", st.cells_in)
       .add("cells_out", st.cells_out)
@@ -183,6 +191,69 @@ Status MapStage::writeReplaced(
       .add("rms_dz_m", st.rms_dz_m, 4)
       .add("ms", static_cast<double>(steadyNowNs() - t0) * 1e-6, 1);
   replaced_json_ = j.str();
+  return Status::ok();
+}
+
+map::DemParams MapStage::replacedParams() const {
+  map::DemParams p = map_->params();
+  p.keep_cell_sources = false;
+  return p;
+}
+
+Status MapStage::writeReplacedFiles(const map::DemMap& replaced, const std::string& dir) const {
+  map::DemRaster r;
+  if (Status s = replaced.toRaster(r); !s) return Status(s.code(), "map re-placement: " + s.message());
+  drivers::GeoOrigin geo;
+  const drivers::GeoOrigin* g = geoOrigin(geo);
+  if (Status s = drivers::writeDemGeoTiff(dir + "/" + run::files::kDemOptimized, r, g); !s) return s;
+  if (Status s = drivers::writeOrthoTiff(dir + "/" + run::files::kOrthoOptimizedTiff, r, g); !s)
+    return s;
+  return drivers::writeOrthoPng(dir + "/" + run::files::kOrthoOptimizedPng, r);
+}
+
+Status MapStage::writeReplaced(
+    const std::function<bool(std::int64_t, Eigen::Isometry3d&)>& correction) {
+  if (!map_ || !map_->params().keep_cell_sources) return Status::ok();
+  map::DemMap out(replacedParams());
+  bool any = false;
+  if (Status s = replace(correction, out, any); !s || !any) return s;
+  return writeReplacedFiles(out, out_dir_);
+}
+
+Status MapStage::replaceLive(
+    const std::function<bool(std::int64_t, Eigen::Isometry3d&)>& correction, std::int64_t t_ns) {
+  if (!map_ || !map_->params().keep_cell_sources) return Status::ok();
+  auto out = std::make_unique<map::DemMap>(replacedParams());
+  bool any = false;
+  if (Status s = replace(correction, *out, any); !s || !any) return s;
+  ++live_replacements_;
+  if (lcm_) {
+    // Every tile of the re-placed map, then an empty one (no data) for each tile of the last
+    // re-placed map that this one no longer has: a listener that keeps the latest tile per
+    // index holds exactly the re-placed map.
+    std::set<std::pair<int, int>> sent;
+    for (const map::DemTile& t : out->tiles()) {
+      out->tileRaster(t, tile_raster_);
+      if (drivers::encodeMapTile(tile_raster_, t.ti, t.tj, t_ns, replaced_tiles_published_,
+                                 tile_bytes_) &&
+          lcm_->publishRaw(cfg_.lcm.params.map_tile_optimized_channel, tile_bytes_.data(),
+                           tile_bytes_.size()))
+        ++replaced_tiles_published_;
+      sent.emplace(t.ti, t.tj);
+    }
+    for (const auto& [ti, tj] : replaced_tiles_sent_) {
+      if (sent.count({ti, tj}) != 0) continue;
+      emptyTile(map_->params(), ti, tj, tile_raster_);
+      if (drivers::encodeMapTile(tile_raster_, ti, tj, t_ns, replaced_tiles_published_,
+                                 tile_bytes_) &&
+          lcm_->publishRaw(cfg_.lcm.params.map_tile_optimized_channel, tile_bytes_.data(),
+                           tile_bytes_.size()))
+        ++replaced_tiles_published_;
+    }
+    replaced_tiles_sent_ = std::move(sent);
+  }
+  std::lock_guard<std::mutex> lock(replaced_mutex_);
+  replaced_ = std::move(out);  // the map save_map writes as *_optimized
   return Status::ok();
 }
 
@@ -204,6 +275,10 @@ std::string MapStage::json(std::int64_t skipped_busy) const {
       .add("cell_bytes", static_cast<std::int64_t>(map_ ? map_->bytes() : 0))
       .add("tiles_published", tiles_published_)
       .add("map_median_ms", times_.median("map"), 3);
+  if (cfg_.loop_enabled) {
+    j.add("replaced_live", live_replacements_);
+    j.add("replaced_tiles_published", replaced_tiles_published_);
+  }
   if (!replaced_json_.empty()) j.addRaw("replaced", replaced_json_);
   return j.str();
 }

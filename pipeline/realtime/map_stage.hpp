@@ -20,6 +20,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,13 @@ class MapStage {
   // After finish() and loop closing's finish: the map re-placed, each fused frame f moved by
   // correction(f, M) (T_corrected = M T_online; false for every frame: nothing is written).
   Status writeReplaced(const std::function<bool(std::int64_t, Eigen::Isometry3d&)>& correction);
+  // Mapper thread, during the run (after a loop-closing solution): the map re-placed with
+  // `correction` as writeReplaced does; on LCM every tile of it goes to
+  // lcm.map_tile_optimized_channel, with an empty tile (no data) for each tile of the previous
+  // re-placed map it no longer has; save_map then also writes it (dem_optimized.tif, ...).
+  // Costs one pass over the map's cells (stats.json map.replaced.ms).
+  Status replaceLive(const std::function<bool(std::int64_t, Eigen::Isometry3d&)>& correction,
+                     std::int64_t t_ns);
   // stats.json's "map" object; `skipped_busy`: frames the runner skipped for this stage.
   std::string json(std::int64_t skipped_busy) const;
   const map::DemMap& map() const { return *map_; }
@@ -62,6 +70,12 @@ class MapStage {
 
  private:
   Status writeFiles(const std::string& dir);
+  // The map re-placed with `correction` into `out` (`any`: some frame had a correction; else
+  // `out` is left empty); sets replaced_json_.
+  Status replace(const std::function<bool(std::int64_t, Eigen::Isometry3d&)>& correction,
+                 map::DemMap& out, bool& any);
+  map::DemParams replacedParams() const;
+  Status writeReplacedFiles(const map::DemMap& replaced, const std::string& dir) const;
   // map.geo_origin in `storage`, or null without one.
   const drivers::GeoOrigin* geoOrigin(drivers::GeoOrigin& storage) const;
   void applySave(std::int64_t t_ns);
@@ -90,7 +104,14 @@ class MapStage {
   } totals_;  // points
   run::StageTimes times_;
   std::vector<std::int64_t> fused_frames_;  // source frame of each fusion (by sequence number)
-  std::string replaced_json_;               // stats.json's map.replaced, once written
+  std::string replaced_json_;               // stats.json's map.replaced, the last re-placement
+  // Live re-placement (replaceLive): the last re-placed map (save_map writes it), the tiles it
+  // sent on LCM, counters.
+  std::mutex replaced_mutex_;
+  std::unique_ptr<map::DemMap> replaced_;
+  std::set<std::pair<int, int>> replaced_tiles_sent_;
+  std::int64_t live_replacements_ = 0;
+  std::int64_t replaced_tiles_published_ = 0;
   // Pending save_map.
   std::mutex save_mutex_;
   std::string save_dir_, save_prefix_;

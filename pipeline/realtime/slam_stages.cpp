@@ -118,6 +118,7 @@ StageGraph SlamStages::graph(EdgePolicy capture_input) {
                      [this](FrameSlot& s) {
                        Status st = map_stage_ ? map_stage_->process(s) : Status::ok();
                        if (st && loop_stage_) st = loop_stage_->process(s);
+                       if (st && map_stage_ && loop_stage_) st = replaceMapLive(s.frame.t_ns);
                        if (!st && loop_stage_) loop_stage_->stopFeedback();
                        return st;
                      },
@@ -201,6 +202,18 @@ Status SlamStages::stereo(FrameSlot& slot) {
   }
   last_stereo_seq_ = slot.seq;
   return stereo_stage_->finish(left, right, fb, slot.stereo, stereo_clock_.get());
+}
+
+Status SlamStages::replaceMapLive(TimeNs t_ns) {
+  if (cfg_.map_replace_period_s <= 0) return Status::ok();
+  const int solutions = loop_stage_->solutionsMade();
+  const std::int64_t now = steadyNowNs();
+  if (solutions == map_replaced_solutions_ || now < next_map_replace_ns_) return Status::ok();
+  std::function<bool(std::int64_t, Eigen::Isometry3d&)> correction;
+  if (!loop_stage_->liveFrameCorrections(correction)) return Status::ok();
+  map_replaced_solutions_ = solutions;
+  next_map_replace_ns_ = now + static_cast<std::int64_t>(cfg_.map_replace_period_s * 1e9);
+  return map_stage_->replaceLive(correction, t_ns);
 }
 
 Status SlamStages::estimate(FrameSlot& slot) {

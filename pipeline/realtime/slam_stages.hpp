@@ -121,6 +121,11 @@ class SlamStages {
   run::StageTimes estimator_times_;
   std::atomic<bool> reset_requested_{false};
   int world_epoch_ = 0;  // estimator thread: resets so far (FrameSlot::world_epoch)
+  // Mapper thread: the map re-placed during the run after a new loop-closing solution, at most
+  // every map.replace_period_s (MapStage::replaceLive).
+  Status replaceMapLive(TimeNs t_ns);
+  int map_replaced_solutions_ = 0;
+  std::int64_t next_map_replace_ns_ = 0;
   std::int64_t next_map_ns_ = 0;
   std::mutex save_mutex_;
   std::string save_path_;

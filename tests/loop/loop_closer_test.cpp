@@ -64,7 +64,9 @@ struct Outcome {
 // Keyframes every 3rd frame of two 60-frame laps over a 60 m loop; online poses chained from
 // noisy relative poses (sigma 2 mrad, 2 cm per keyframe edge).
 // wrong_fraction: the test hook re-attaching that share of the verified loops to wrong keyframes.
-Outcome run(const BinaryVocabulary& voc, double wrong_fraction = 0) {
+// reset_frame >= 0: the estimator is reset there (a new world, world_epoch 1, the camera at the
+// identity; the edge across it carries no information).
+Outcome run(const BinaryVocabulary& voc, double wrong_fraction = 0, int reset_frame = -1) {
   drivers::SyntheticFlight f(flight(3, 120, 60, 60));
   DenseStereo dense(denseParams(), 320, 240);
   LoopCloserParams p;
@@ -82,7 +84,7 @@ Outcome run(const BinaryVocabulary& voc, double wrong_fraction = 0) {
   Outcome o;
   ImageU8 l, r;
   DisparityResult d;
-  Eigen::Isometry3d T_online = f.pose(0);
+  Eigen::Isometry3d T_online = f.pose(0), T_online_prev = T_online;
   for (int i = 0, id = 0; i < 120; i += 3, ++id) {
     EXPECT_TRUE(f.render(i, l, r).isOk());
     EXPECT_TRUE(dense.process(l.cview(), r.cview(), d).isOk());
@@ -97,7 +99,18 @@ Outcome run(const BinaryVocabulary& voc, double wrong_fraction = 0) {
       Z = noisy;
       T_online = T_online * Z;
     }
+    Matrix6d edge_cov = cov;
+    if (reset_frame >= 0 && i == reset_frame) {  // the online pose jumps to the new world
+      Z = T_online_prev.inverse();
+      T_online = Eigen::Isometry3d::Identity();
+      edge_cov.diagonal() << 100, 100, 100, 1e8, 1e8, 1e8;
+    }
+    T_online_prev = T_online;
     Keyframe kf;
+    if (reset_frame >= 0 && i >= reset_frame) {
+      kf.world_epoch = 1;
+      kf.world_since_t_ns = f.timeNs(reset_frame);
+    }
     kf.id = id;
     kf.frame = i;
     kf.t_ns = f.timeNs(i);
@@ -105,7 +118,7 @@ Outcome run(const BinaryVocabulary& voc, double wrong_fraction = 0) {
     EXPECT_TRUE(builder.process(l.cview(), d, kf).isOk());
     o.points += kf.size();
     bool optimised = false;
-    const Status s = closer.process(std::move(kf), cov, Z, optimised);
+    const Status s = closer.process(std::move(kf), edge_cov, Z, optimised);
     EXPECT_TRUE(s.isOk()) << s.message();
     o.online.push_back(T_online);
     o.truth.push_back(f.pose(i));
@@ -176,6 +189,46 @@ TEST(LoopCloserTest, SecondLapLoopsAreTrueAndRemoveTheDrift) {
   std::printf("with %d wrong loops injected: corrected %.4f m (clean %.4f m)\n",
               faulty.stats.injected_wrong, after_faulty, after);
   EXPECT_LT(std::abs(after_faulty - after), 0.05 * after);
+}
+
+// A reset at frame 75 (the second lap): the new world's first keyframe is the gauge (it stays
+// where the online estimate put it, the identity) and the loops across the reset bring the first
+// lap into the new world: every corrected keyframe near the truth expressed in that world.
+TEST(LoopCloserTest, ResetKeepsTheNewWorldAndBringsTheOldOneIntoIt) {
+  const BinaryVocabulary voc = trainVocabulary();
+  const int reset = 75;
+  const Outcome o = run(voc, 0, reset);
+  EXPECT_EQ(o.stats.world_resets, 1);
+  int across = 0;
+  for (const AcceptedLoop& a : o.loops) across += a.query_frame >= reset && a.candidate_frame < reset;
+  ASSERT_GE(across, 2);
+  drivers::SyntheticFlight f(flight(3, 120, 60, 60));
+  const Eigen::Isometry3d W = f.pose(reset).inverse();  // new world <- old world (truth)
+  double pre = 0, post = 0, online_pre = 0;
+  int n_pre = 0, n_post = 0;
+  for (std::size_t k = 0; k < o.corrected.size(); ++k) {
+    const Eigen::Isometry3d truth = W * o.truth[k];
+    const double e = (o.corrected[k].translation() - truth.translation()).squaredNorm();
+    if (o.frames[k] < reset) {
+      pre += e;
+      online_pre += (o.online[k].translation() - truth.translation()).squaredNorm();
+      ++n_pre;
+    } else {
+      post += e;
+      ++n_post;
+      if (o.frames[k] == reset) {  // the gauge
+        EXPECT_TRUE(o.corrected[k].isApprox(Eigen::Isometry3d::Identity(), 1e-12));
+      }
+    }
+  }
+  pre = std::sqrt(pre / n_pre);
+  post = std::sqrt(post / n_post);
+  online_pre = std::sqrt(online_pre / n_pre);
+  std::printf("reset: keyframes in the new world, rms before the reset %.3f m (online %.1f m), "
+              "after %.3f m\n", pre, online_pre, post);
+  EXPECT_GT(online_pre, 10.0);
+  EXPECT_LT(pre, 0.5);
+  EXPECT_LT(post, 0.5);
 }
 
 TEST(LoopCloserTest, FrontEndChainsMotionCovariances) {

@@ -55,7 +55,7 @@ class CliLoop : public ::testing::Test {
                                       << (dir_ / "v.svvoc").string()
                                       << "\n  exclude_recent: 8\n"
                                       << "pipeline:\n  fault:\n    reset_frame: " << kResetFrame
-                                      << "\n";
+                                      << "\nmap:\n  replace_period_s: 0.001\n";
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
   static int run(const std::string& args, std::string& err) {
@@ -76,8 +76,9 @@ fs::path CliLoop::dir_;
 TEST_F(CliLoop, TwoLapsCloseLoopsAndWriteTheOptimisedTrajectory) {
   std::string err;
   const fs::path a = dir_ / "a", b = dir_ / "b";
+  const fs::path log = dir_ / "run.lcmlog";
   ASSERT_EQ(run("run --config " + (dir_ / "loop.yaml").string() + " --source " + kFlight +
-                    " --out " + a.string(),
+                    " --out " + a.string() + " --lcm-url 'file://" + log.string() + "?mode=w'",
                 err),
             0)
       << err;
@@ -161,6 +162,26 @@ TEST_F(CliLoop, TwoLapsCloseLoopsAndWriteTheOptimisedTrajectory) {
   EXPECT_TRUE(fs::exists(a / "ortho_optimized.png"));
   EXPECT_EQ(slurp(a / "dem_optimized.tif"), slurp(b / "dem_optimized.tif"));
   EXPECT_NE(stats.find("\"replaced\": {\"cells_in\": "), std::string::npos) << stats;
+  // Re-placed during the flight too (map.replace_period_s): each time the whole map on
+  // SVSLAM_MAP_TILE_OPTIMIZED, and empty tiles where the map moved away (the first lap moved
+  // into the new world).
+  const std::size_t rl = stats.find("\"replaced_live\": ");
+  ASSERT_NE(rl, std::string::npos) << stats;
+  EXPECT_GE(std::stoi(stats.substr(rl + 17)), 2) << stats;
+  const std::size_t rt = stats.find("\"replaced_tiles_published\": ");
+  ASSERT_NE(rt, std::string::npos) << stats;
+  const int tiles = std::stoi(stats.substr(rt + 28));
+  EXPECT_GE(tiles, 10) << stats;
+  ASSERT_EQ(run("listen --url 'file://" + log.string() +
+                    "?speed=0' --channel SVSLAM_MAP_TILE_OPTIMIZED",
+                err),
+            0)
+      << err;
+  const std::vector<std::string> msgs = lines(dir_ / "out.txt");
+  EXPECT_EQ(static_cast<int>(msgs.size()), tiles);
+  int empty = 0;
+  for (const std::string& m : msgs) empty += m.find("\"valid_cells\": 0,") != std::string::npos;
+  EXPECT_GE(empty, 1);
 }
 
 TEST_F(CliLoop, BadLoopConfigurationIsNamed) {
