@@ -77,6 +77,8 @@ Status SyntheticFlightParams::validate() const {
     return outOfRange("right_black_from", "in -1..100000");
   if (right_black_to < -1 || right_black_to > 100000)
     return outOfRange("right_black_to", "in -1..100000");
+  if (black_from < -1 || black_from > 100000) return outOfRange("black_from", "in -1..100000");
+  if (black_to < -1 || black_to > 100000) return outOfRange("black_to", "in -1..100000");
   if (width < 32 || width > 8192) return outOfRange("width", "in 32..8192");
   if (height < 32 || height > 8192) return outOfRange("height", "in 32..8192");
   if (!inRange(baseline_m, 1e-6, 100.0)) return outOfRange("baseline_m", "in (0, 100]");

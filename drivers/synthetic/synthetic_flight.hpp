@@ -64,6 +64,11 @@ struct SyntheticFlightParams {
   // right_black_to) are black; right_black_from = -1: none; right_black_to = -1: to the end.
   int right_black_from = -1;
   int right_black_to = -1;
+  // Both cameras lost (a real loss of tracking: lens covered, camera restarted): the left and
+  // right images of frames [black_from, black_to) are black; black_from = -1: none;
+  // black_to = -1: to the end.
+  int black_from = -1;
+  int black_to = -1;
   int width = 1024;                // px, 32..8192
   int height = 768;                // px, 32..8192
   double baseline_m = 2.2;         // m, (0, 100]; rover 0.5

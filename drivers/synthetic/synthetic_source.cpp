@@ -25,6 +25,10 @@ class SyntheticSource final : public StereoSource {
     if (p.right_black_from >= 0 && pos_ >= p.right_black_from &&
         (p.right_black_to < 0 || pos_ < p.right_black_to))
       out.right.fill(0);
+    if (p.black_from >= 0 && pos_ >= p.black_from && (p.black_to < 0 || pos_ < p.black_to)) {
+      out.left.fill(0);
+      out.right.fill(0);
+    }
     out.index = pos_;
     out.t_ns = flight_.timeNs(pos_);
     ++pos_;
@@ -111,6 +115,8 @@ Result<SyntheticFlightParams> parseSyntheticOptions(const std::string& options) 
                                             {"loop_frames", &p.loop_frames},
                                             {"right_black_from", &p.right_black_from},
                                             {"right_black_to", &p.right_black_to},
+                                            {"black_from", &p.black_from},
+                                            {"black_to", &p.black_to},
                                             {"width", &p.width},
                                             {"height", &p.height},
                                             {"supersample", &p.supersample}};

@@ -67,6 +67,22 @@ ConfigSection slamConfigSection() {
              "prediction covariance (rotation) when the VME fails"),
       number("lost_trans_sigma_m", SVSLAM_FIELD(slam.lost_trans_sigma_m), 1e-6, 1000, "m",
              "prediction covariance (translation) when the VME fails"),
+      flag("relocalise", SVSLAM_FIELD(slam.relocalisation.enabled),
+           "keep keyframes while tracking is good and find a lost frame's pose against them "
+           "(ekf mode; needs dense_stereo.enabled); a keyframe's ORB costs 70-190 ms on the "
+           "estimator's thread (docs/slam.md)"),
+      number("relocalise_keyframes", SVSLAM_FIELD(slam.relocalisation.max_keyframes), 1, 100000,
+             "", "keyframes kept for relocalisation (a ring: the oldest replaced)"),
+      number("relocalise_candidates", SVSLAM_FIELD(slam.relocalisation.max_candidates), 1, 1000,
+             "", "keyframes verified per lost frame, nearest the predicted position first"),
+      number("relocalise_min_landmarks", SVSLAM_FIELD(slam.relocalisation.min_landmarks), 0,
+             10000, "",
+             "a frame without motion and with fewer landmark observations than this is lost"),
+      number("relocalise_max_lost_frames", SVSLAM_FIELD(slam.relocalisation.max_lost_frames), 1,
+             100000, "",
+             "lost frames with points whose relocalisation failed before the loss is given up"),
+      number("relocalise_min_inliers", SVSLAM_FIELD(slam.relocalisation.verify.min_inliers), 6,
+             2000, "", "inliers of the 3D-3D motion against a keyframe to accept a pose"),
       flag("right_camera_check", SVSLAM_FIELD(slam.right_camera.enabled),
            "watch the right image (missing, flat, frozen) and fly on the left one alone while "
            "it is unusable (bearing-only SLAM)"),

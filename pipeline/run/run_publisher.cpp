@@ -71,6 +71,8 @@ Status RunPublisher::publish(const rt::FrameSlot& slot) {
   p.status = sr.initializing          ? drivers::TrackingStatus::kInitializing
              : sr.mono                ? drivers::TrackingStatus::kMonocular
              : sr.odometry.frame == 0 ? drivers::TrackingStatus::kInitializing
+             : sr.relocalised         ? drivers::TrackingStatus::kTracking
+             : sr.lost                ? drivers::TrackingStatus::kLost
              : sr.odometry.tracked    ? drivers::TrackingStatus::kTracking
                                       : drivers::TrackingStatus::kLost;
   p.motion_inliers = sr.odometry.inliers;

@@ -37,9 +37,19 @@ void RunSummary::add(int frame, const SlamFrameResult& sr) {
     if (!prev_mono_) ++right_camera_losses;
   }
   prev_mono_ = sr.mono;
+  frames_lost += sr.lost ? 1 : 0;
+  relocalisation_failures += sr.relocalisation_failed ? 1 : 0;
+  if (sr.relocalised) {
+    ++relocalisations;
+    last_relocalisation_frame = frame;
+    last_relocalisation_inliers = sr.relocalisation_inliers;
+  }
   ++frames;
   if (sr.mono) {
     // A pose from bearings of the map (camera loss): not an odometry failure.
+  } else if (sr.relocalised && !r.tracked) {
+    // No frame-to-frame motion (after a loss), the pose found against a kept keyframe.
+    ++relocalised_untracked;
   } else if (sr.stereo_resumed && !r.tracked) {
     // The first stereo frame after mono ones: the odometry's previous frame is stale; the pose
     // comes from the filter's prediction and the landmark observations.
@@ -94,7 +104,8 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
       .add("mode", config::toString(cfg.mode))
       .add("frames", s.frames)
       .add("frames_tracked", s.tracked)
-      .add("frames_without_pose", s.frames - s.tracked - s.mono_frames - s.resumed_untracked)
+      .add("frames_without_pose",
+           s.frames - s.tracked - s.mono_frames - s.resumed_untracked - s.relocalised_untracked)
       // Camera loss: frames posed from the left image alone (bearings of the map), the times
       // the right camera became unusable and why, frame by frame
       .add("frames_monocular", s.mono_frames)
@@ -104,6 +115,11 @@ std::string statsJson(const config::RunConfig& cfg, const std::string& source, c
       .add("altitude_readings_rejected", s.altitude_rejected)
       .add("right_camera_losses", s.right_camera_losses)
       .add("frames_stereo_resumed_untracked", s.resumed_untracked)
+      .add("frames_lost", s.frames_lost)
+      .add("relocalisations", s.relocalisations)
+      .add("relocalisation_failures", s.relocalisation_failures)
+      .add("last_relocalisation_frame", s.last_relocalisation_frame)
+      .add("last_relocalisation_inliers", s.last_relocalisation_inliers)
       .add("right_camera_missing_frames", s.right_camera_state_counts[1])
       .add("right_camera_flat_frames", s.right_camera_state_counts[2])
       .add("right_camera_frozen_frames", s.right_camera_state_counts[3])

@@ -40,6 +40,11 @@ struct RunSummary {
   int mono_frames = 0, right_camera_losses = 0, bearing_added = 0;
   int mono_initializing = 0;  // monocular frames before the two-view start (no map, no pose)
   int resumed_untracked = 0;  // first stereo frames after mono ones the odometry did not track
+  // Relocalisation (slam/relocaliser.hpp): lost frames, relocalisations (and the inliers of
+  // the last), searches that failed.
+  int frames_lost = 0, relocalisations = 0, relocalisation_failures = 0;
+  int last_relocalisation_frame = -1, last_relocalisation_inliers = 0;
+  int relocalised_untracked = 0;  // relocalised frames without a frame-to-frame motion
   std::int64_t bearing_count = 0;
   double sum_bearing_nis = 0;
   std::int64_t right_camera_state_counts[4] = {0, 0, 0, 0};

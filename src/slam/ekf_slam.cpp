@@ -78,6 +78,19 @@ Status EkfSlam::reset(const Eigen::Isometry3d& T_world_cam, const Matrix6d& P0) 
   return Status::ok();
 }
 
+Status EkfSlam::replacePose(const Eigen::Isometry3d& T_world_cam, const Matrix6d& P_pose) {
+  if (!init_status_) return init_status_;
+  if (Status s = checkRigid(T_world_cam, "replacePose: T_world_cam"); !s) return s;
+  if (Status s = checkCovariance<6>(P_pose, false, "replacePose: P_pose"); !s) return s;
+  T_world_cam_.linear() = orthonormalised(T_world_cam.linear());
+  T_world_cam_.translation() = T_world_cam.translation();
+  const int n = stateDim();
+  P_.topLeftCorner<6, 6>() = 0.5 * (P_pose + P_pose.transpose());
+  // The stored lower triangle: rows of the landmarks, columns of the pose.
+  if (n > 6) P_.block(6, 0, n - 6, 6).setZero();
+  return Status::ok();
+}
+
 Status EkfSlam::transformWorld(const Eigen::Isometry3d& C_new_old) {
   if (!init_status_) return init_status_;
   if (Status s = checkRigid(C_new_old, "transformWorld: C_new_old"); !s) return s;

@@ -163,6 +163,11 @@ class EkfSlam {
   // estimate and its uncertainty together: every relative quantity (landmark in the camera,
   // its predicted observation and innovation covariance) is unchanged. O(n^2); allocates nothing.
   Status transformWorld(const Eigen::Isometry3d& C_new_old);
+  // Relocalisation (slam/relocaliser.hpp): the pose becomes T_world_cam with covariance P_pose
+  // ([dtheta, dt], symmetric positive semi-definite), independent of the landmarks (its cross
+  // covariances are set to zero): after a loss the prediction carries no information the
+  // relocalised pose does not, and the landmarks keep their own estimates. O(n).
+  Status replacePose(const Eigen::Isometry3d& T_world_cam, const Matrix6d& P_pose);
   // Update with a direct measurement of the camera position, t_meas (m, world) with covariance
   // R_meas (m^2, symmetric positive definite; e.g. the loop-closing back end's corrected
   // position): z = t_meas - t_wc = H dx + v with H = [0 I3 0 ... 0], so

@@ -63,6 +63,13 @@ struct SlamFrameResult {
   bool stereo_resumed = false;  // first stereo frame after mono ones (predicted by the filter:
                                 // the odometry's previous frame is stale and may fail)
   int right_camera = 0;
+  // Relocalisation (slam/relocaliser.hpp): the frame was lost (no motion, too few landmarks, or
+  // a loss still going on), its pose was found against a kept keyframe (with that many
+  // inliers), or a search failed.
+  bool lost = false;
+  bool relocalised = false;
+  bool relocalisation_failed = false;
+  int relocalisation_inliers = 0;
   double bearing_nis_sum = 0;
   int bearing_count = 0;
   int bearing_added = 0;

@@ -3,6 +3,7 @@
 #include "core/status.hpp"
 #include "slam/bearing_initializer.hpp"
 #include "slam/ekf_slam.hpp"
+#include "slam/relocaliser.hpp"
 #include "slam/right_camera_monitor.hpp"
 #include "slam/two_view_initializer.hpp"
 
@@ -94,6 +95,9 @@ struct SlamSystemParams {
   // of this side (the best localised), m, > 0: the map is bounded by the volume it covers, not
   // by the flight time (slam/retired_landmark_map.hpp).
   double map_voxel_m = 0.25;
+  // Relocalisation after a real loss (slam/relocaliser.hpp; SlamSystem "Lost frames"): keyframes
+  // kept while tracking is good, a lost frame's pose found against them. Stereo ekf mode.
+  RelocaliserParams relocalisation;
   Status validate() const;
 };
 

@@ -36,6 +36,8 @@ Status SlamSystemParams::validate() const {
     return Status::invalidArgument("slam.lost_rot_sigma_rad and lost_trans_sigma_m must be > 0");
   if (!(map_voxel_m > 0.0) || !std::isfinite(map_voxel_m))
     return Status::invalidArgument("slam.map_voxel_m must be > 0 and finite");
+  if (Status s = relocalisation.validate(); !s)
+    return Status::invalidArgument("slam.relocalise_* (" + s.message() + ")");
   // The bearing initialiser's and the monitor's own checks, named by their configuration keys.
   if (!(bearing_init.r_min_m > 0) || !(bearing_init.r_max_m > bearing_init.r_min_m) ||
       !std::isfinite(bearing_init.r_max_m))
@@ -100,6 +102,11 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
   if (init_status_) init_status_ = two_view_.initStatus();
   cell_count_.resize(static_cast<std::size_t>(params.grid_cols * params.grid_rows));
   if (!init_status_) return;
+  if (params.relocalisation.enabled && !left_only) {
+    reloc_ = std::make_unique<Relocaliser>(params.relocalisation, calib);
+    init_status_ = reloc_->initStatus();
+    if (!init_status_) return;
+  }
   mono_cands_.resize(static_cast<std::size_t>(params.mono_max_candidates));
   mono_patches_.resize(static_cast<std::size_t>(params.mono_max_candidates) *
                        static_cast<std::size_t>((2 * params.patch_half_px + 1) *
@@ -242,8 +249,17 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
       if (Status s = ekf_.update(obs_, results_, &executor); !s) return s;
       applyObservations(out, false);
     }
+    if (Status s = relocaliseIfLost(left, right, stereo, out, executor); !s) return s;
   }
-  selectLandmarks(left, out);
+  if (!lost_) selectLandmarks(left, out);  // never from a pose that may be far off
+  if (reloc_ && !lost_ && od.tracked && stereo.has_disparity &&
+      (frame_ == 0 || out.nis_count >= params_.relocalisation.min_landmarks)) {
+    bool kept = false;
+    if (Status s = reloc_->offer(left, stereo.disparity, ekf_.pose(), ekf_.poseCovariance(),
+                                 frame_, kept);
+        !s)
+      return s;
+  }
   if (observer) observer->stageDone("ekf");
 
   out.T_world_cam = ekf_.pose();
@@ -257,6 +273,52 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
   prev_mono_ = false;
   for (MonoCandidate& c : mono_cands_) c.alive = false;
   ++frame_;
+  return Status::ok();
+}
+
+Status SlamSystem::relocaliseIfLost(ImageView<const std::uint8_t> left,
+                                    ImageView<const std::uint8_t> right,
+                                    const StereoStageOutput& stereo, SlamFrameResult& out,
+                                    Executor& executor) {
+  if (!reloc_) return Status::ok();
+  const RelocaliserParams& rp = params_.relocalisation;
+  const bool few = out.nis_count < rp.min_landmarks;
+  if (!few) {
+    lost_ = false;  // the landmarks confirm the pose
+  } else if (!out.odometry.tracked) {
+    lost_ = true;
+  }
+  if (!lost_) {
+    lost_frames_ = 0;
+    return Status::ok();
+  }
+  out.lost = true;
+  if (!stereo.has_disparity) return Status::ok();
+  RelocalisationResult rr;
+  if (Status s = reloc_->relocalise(left, stereo.disparity, ekf_.pose(), frame_, rr); !s)
+    return s;
+  if (!rr.found) {
+    out.relocalisation_failed = true;
+    // Frames that could have been relocalised (keyframes verified against) and were not: a
+    // black or blank frame does not count.
+    if (rr.candidates_tried > 0 && ++lost_frames_ >= rp.max_lost_frames) {
+      lost_ = false;  // given up: on from the prediction (new landmarks and keyframes again)
+      lost_frames_ = 0;
+    }
+    return Status::ok();
+  }
+  if (Status s = ekf_.replacePose(rr.T_world_cam, rr.covariance); !s) return s;
+  lost_ = false;
+  lost_frames_ = 0;
+  out.relocalised = true;
+  out.relocalisation_inliers = rr.inliers;
+  // The landmarks observed from the pose found.
+  restoreAnchors(left, out);
+  searchLandmarks(left, right, out);
+  if (!obs_.empty()) {
+    if (Status s = ekf_.update(obs_, results_, &executor); !s) return s;
+    applyObservations(out, false);
+  }
   return Status::ok();
 }
 

@@ -98,6 +98,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <memory>
 #include <vector>
 
 #include "core/camera.hpp"
@@ -270,6 +271,15 @@ class SlamSystem final : public Estimator {
   std::vector<std::uint8_t> anchor_patches_;  // (4 patch_half_px + 1)^2 bytes per anchor
   Eigen::Isometry3d anchor_pose_ = Eigen::Isometry3d::Identity();  // T_world_cam, first frame
   std::vector<int> anchored_ids_;  // ids of the landmarks initialised from anchors
+  // Lost frames (relocalisation): keyframes kept while tracking is good; lost_ from a frame
+  // without motion and with fewer than relocalisation.min_landmarks landmark observations until
+  // relocalised, confirmed by the landmarks, or given up after max_lost_frames.
+  std::unique_ptr<Relocaliser> reloc_;
+  bool lost_ = false;
+  int lost_frames_ = 0;
+  Status relocaliseIfLost(ImageView<const std::uint8_t> left,
+                          ImageView<const std::uint8_t> right, const StereoStageOutput& stereo,
+                          SlamFrameResult& out, Executor& executor);
   // Camera loss.
   RightCameraMonitor right_monitor_;
   BearingInitializer<3> bearing_init_;
