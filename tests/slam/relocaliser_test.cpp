@@ -9,7 +9,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,13 +36,22 @@ drivers::SyntheticFlightParams flightParams() {
 
 class RelocaliserTest : public ::testing::Test {
  protected:
-  RelocaliserTest() : flight_(flightParams()) {
-    DenseStereoParams dp;
-    dense_ = std::make_unique<DenseStereo>(dp, 512, 384);
-  }
+  RelocaliserTest() : flight_(flightParams()) {}
+  // Frame `frame` rendered with its dense disparity into l_ and d_ (each frame rendered once
+  // for the whole suite: the renderer is most of this test's time).
   void render(int frame) {
-    ASSERT_TRUE(flight_.render(frame, l_, r_).isOk());
-    ASSERT_TRUE(dense_->process(l_.cview(), r_.cview(), d_).isOk());
+    auto it = cache().find(frame);
+    if (it == cache().end()) {
+      static std::unique_ptr<DenseStereo> dense =
+          std::make_unique<DenseStereo>(DenseStereoParams{}, 512, 384);
+      Rendered r;
+      ImageU8 right;
+      EXPECT_TRUE(flight_.render(frame, r.left, right).isOk());
+      EXPECT_TRUE(dense->process(r.left.cview(), right.cview(), r.dense).isOk());
+      it = cache().emplace(frame, std::move(r)).first;
+    }
+    l_ = it->second.left.cview();
+    d_ = &it->second.dense;
   }
   // T_first_cam of the ground truth (the filter's world is the first camera).
   Eigen::Isometry3d truth(int frame) const { return flight_.pose(0).inverse() * flight_.pose(frame); }
@@ -51,13 +62,20 @@ class RelocaliserTest : public ::testing::Test {
     for (int k = 0; k <= last; ++k) {
       render(k);
       bool kept = false;
-      ASSERT_TRUE(r.offer(l_.cview(), d_, truth(k), cov, k, kept).isOk());
+      ASSERT_TRUE(r.offer(l_, *d_, truth(k), cov, k, kept).isOk());
     }
   }
+  struct Rendered {
+    ImageU8 left;
+    DisparityResult dense;
+  };
+  static std::map<int, Rendered>& cache() {
+    static std::map<int, Rendered> c;
+    return c;
+  }
   drivers::SyntheticFlight flight_;
-  std::unique_ptr<DenseStereo> dense_;
-  ImageU8 l_, r_;
-  DisparityResult d_;
+  ImageView<const std::uint8_t> l_;  // the frame last rendered and its dense disparity
+  const DisparityResult* d_ = nullptr;
 };
 
 TEST_F(RelocaliserTest, LostFrameIsFoundAgainstTheKeptKeyframes) {
@@ -70,7 +88,7 @@ TEST_F(RelocaliserTest, LostFrameIsFoundAgainstTheKeptKeyframes) {
     Eigen::Isometry3d pred = truth(frame);
     pred.translation() += Eigen::Vector3d(6.0, -4.0, 1.0);  // the prediction after a loss
     RelocalisationResult out;
-    ASSERT_TRUE(reloc.relocalise(l_.cview(), d_, pred, frame, out).isOk());
+    ASSERT_TRUE(reloc.relocalise(l_, *d_, pred, frame, out).isOk());
     ASSERT_TRUE(out.found) << "frame " << frame << ": " << out.reason;
     const Eigen::Isometry3d T = truth(frame);
     const double dt = (out.T_world_cam.translation() - T.translation()).norm();
@@ -96,21 +114,25 @@ TEST_F(RelocaliserTest, NoPoseWhereNoKeyframeSawTheGroundOrInABlackFrame) {
   ASSERT_TRUE(reloc.initStatus().isOk());
   RelocalisationResult out;
   render(10);
-  ASSERT_TRUE(reloc.relocalise(l_.cview(), d_, truth(10), 10, out).isOk());
+  ASSERT_TRUE(reloc.relocalise(l_, *d_, truth(10), 10, out).isOk());
   EXPECT_FALSE(out.found);
   EXPECT_STREQ(out.reason, "no keyframe kept yet");
   keep(reloc, 20);
   // The other side of the loop: the ground the first 20 frames saw is out of view.
   for (int frame : {50, 60, 70}) {
     render(frame);
-    ASSERT_TRUE(reloc.relocalise(l_.cview(), d_, truth(20), frame, out).isOk());
+    ASSERT_TRUE(reloc.relocalise(l_, *d_, truth(20), frame, out).isOk());
     EXPECT_FALSE(out.found) << "frame " << frame << " against keyframe " << out.keyframe_frame;
     EXPECT_GT(out.candidates_tried, 0);
   }
-  l_.fill(0);
-  r_.fill(0);
-  ASSERT_TRUE(dense_->process(l_.cview(), r_.cview(), d_).isOk());
-  ASSERT_TRUE(reloc.relocalise(l_.cview(), d_, truth(20), 21, out).isOk());
+  ImageU8 black(512, 384);
+  black.fill(0);
+  DenseStereo dense(DenseStereoParams{}, 512, 384);
+  DisparityResult black_dense;
+  ASSERT_TRUE(dense.process(black.cview(), black.cview(), black_dense).isOk());
+  l_ = black.cview();
+  d_ = &black_dense;
+  ASSERT_TRUE(reloc.relocalise(l_, *d_, truth(20), 21, out).isOk());
   EXPECT_FALSE(out.found);
   EXPECT_STREQ(out.reason, "too few points in the frame");
 }
@@ -125,15 +147,15 @@ TEST_F(RelocaliserTest, RingKeepsItsBoundAndBadInputIsNamed) {
   // The newest keyframes are the ones kept: frame 38 is found.
   render(38);
   RelocalisationResult out;
-  ASSERT_TRUE(reloc.relocalise(l_.cview(), d_, truth(38), 38, out).isOk());
+  ASSERT_TRUE(reloc.relocalise(l_, *d_, truth(38), 38, out).isOk());
   EXPECT_TRUE(out.found) << out.reason;
   EXPECT_GE(out.keyframe_frame, 25);
 
   Eigen::Isometry3d bad = Eigen::Isometry3d::Identity();
   bad.translation().x() = NAN;
-  EXPECT_EQ(reloc.relocalise(l_.cview(), d_, bad, 39, out).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(reloc.relocalise(l_, *d_, bad, 39, out).code(), StatusCode::kInvalidArgument);
   bool kept = false;
-  EXPECT_EQ(reloc.offer(l_.cview(), d_, bad, Eigen::Matrix<double, 6, 6>::Zero(), 39, kept).code(),
+  EXPECT_EQ(reloc.offer(l_, *d_, bad, Eigen::Matrix<double, 6, 6>::Zero(), 39, kept).code(),
             StatusCode::kInvalidArgument);
   for (auto mutate : {+[](RelocaliserParams& q) { q.max_keyframes = 0; },
                       +[](RelocaliserParams& q) { q.max_candidates = 0; },
@@ -153,7 +175,7 @@ struct LossRun {
 };
 
 // The whole flight through the filter, both cameras black in frames [40, 50).
-LossRun runFilter(bool relocalise) {
+LossRun runFilter(bool relocalise, int last_frame = 69) {
   LossRun r;
   auto src = drivers::openStereoSource(
       "synthetic:width=512,height=384,frames=70,black_from=40,black_to=50");
@@ -171,7 +193,7 @@ LossRun runFilter(bool relocalise) {
   for (int k = 0;; ++k) {
     auto more = (*src)->next(f);
     EXPECT_TRUE(more.isOk()) << more.status().message();
-    if (!more || !*more) break;
+    if (!more || !*more || k > last_frame) break;
     SlamFrameResult out;
     const Status s = slam.process(f.left.cview(), f.right.cview(), out, ex);
     EXPECT_TRUE(s.isOk()) << "frame " << k << ": " << s.message();
@@ -191,12 +213,11 @@ LossRun runFilter(bool relocalise) {
 }
 
 TEST(RelocalisationInTheFilter, BothCamerasBlackForOneSecond) {
-  const LossRun with = runFilter(true), without = runFilter(false);
+  const LossRun with = runFilter(true), without = runFilter(false, 55);
   std::printf("both cameras black, frames 40-49: with relocalisation %d lost frames, %d "
-              "relocalised, error at frame 55 %.3f m, final %.3f m; without: error at 55 %.3f m, "
-              "final %.3f m\n",
+              "relocalised, error at frame 55 %.3f m, final %.3f m; without: error at 55 %.3f m\n",
               with.lost, with.relocalised, with.error_at_55_m, with.final_error_m,
-              without.error_at_55_m, without.final_error_m);
+              without.error_at_55_m);
   // The black frames are flown as a camera loss (the right image is flat: bearings of the map,
   // none found in a black left image); the first frame with images has no motion (its previous
   // frame is black) and is relocalised.
@@ -205,7 +226,7 @@ TEST(RelocalisationInTheFilter, BothCamerasBlackForOneSecond) {
   EXPECT_EQ(with.without_motion_or_relocalisation, 0);
   EXPECT_LT(with.error_at_55_m, 0.15);
   EXPECT_LT(with.final_error_m, 0.1);
-  EXPECT_GT(without.final_error_m, 1.0);  // what relocalisation is for
+  EXPECT_GT(without.error_at_55_m, 1.0);  // what relocalisation is for
 }
 
 }  // namespace
