@@ -268,7 +268,11 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
   out.landmarks_in_map = landmarks_.size();
   prev_tracks_.swap(cur_tracks_);
   prev_landmark_uv_.swap(landmark_uv_);
-  last_motion_ = ekf_.pose().inverse() * prev_pose_;
+  // The constant-velocity motion of a following mono frame: a relocalised pose jumped, so the
+  // frame's own measured motion (none: the identity).
+  last_motion_ = !out.relocalised ? ekf_.pose().inverse() * prev_pose_
+                 : od.tracked     ? od.T_cur_prev
+                                  : Eigen::Isometry3d::Identity();
   prev_pose_ = ekf_.pose();
   prev_mono_ = false;
   for (MonoCandidate& c : mono_cands_) c.alive = false;
