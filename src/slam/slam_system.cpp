@@ -243,12 +243,7 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
                      : diagonalMotionCov(params_.lost_rot_sigma_rad, params_.lost_trans_sigma_m);
       if (Status s = ekf_.predict(od.T_cur_prev, R_u); !s) return s;
     }
-    restoreAnchors(left, out);
-    searchLandmarks(left, right, out);
-    if (!obs_.empty()) {
-      if (Status s = ekf_.update(obs_, results_, &executor); !s) return s;
-      applyObservations(out, false);
-    }
+    if (Status s = observeLandmarks(left, right, out, executor); !s) return s;
     if (Status s = relocaliseIfLost(left, right, stereo, out, executor); !s) return s;
   }
   if (!lost_) selectLandmarks(left, out);  // never from a pose that may be far off
@@ -316,13 +311,17 @@ Status SlamSystem::relocaliseIfLost(ImageView<const std::uint8_t> left,
   lost_frames_ = 0;
   out.relocalised = true;
   out.relocalisation_inliers = rr.inliers;
-  // The landmarks observed from the pose found.
+  return observeLandmarks(left, right, out, executor);  // from the pose found
+}
+
+Status SlamSystem::observeLandmarks(ImageView<const std::uint8_t> left,
+                                    ImageView<const std::uint8_t> right, SlamFrameResult& out,
+                                    Executor& executor) {
   restoreAnchors(left, out);
   searchLandmarks(left, right, out);
-  if (!obs_.empty()) {
-    if (Status s = ekf_.update(obs_, results_, &executor); !s) return s;
-    applyObservations(out, false);
-  }
+  if (obs_.empty()) return Status::ok();
+  if (Status s = ekf_.update(obs_, results_, &executor); !s) return s;
+  applyObservations(out, false);
   return Status::ok();
 }
 

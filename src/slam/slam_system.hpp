@@ -277,6 +277,9 @@ class SlamSystem final : public Estimator {
   std::unique_ptr<Relocaliser> reloc_;
   bool lost_ = false;
   int lost_frames_ = 0;
+  // Step 3 of a stereo frame (retired anchors back, the landmarks searched) and the update.
+  Status observeLandmarks(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                          SlamFrameResult& out, Executor& executor);
   Status relocaliseIfLost(ImageView<const std::uint8_t> left,
                           ImageView<const std::uint8_t> right, const StereoStageOutput& stereo,
                           SlamFrameResult& out, Executor& executor);
