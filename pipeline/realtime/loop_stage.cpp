@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <atomic>
-#include <functional>
-#include <memory>
 #include <cstdio>
+#include <functional>
+#include <iterator>
 #include <limits>
+#include <memory>
+#include <utility>
 
 #include "pipeline/cli/json_writer.hpp"
 #include "pipeline/realtime/pipeline_runner.hpp"
@@ -74,21 +76,17 @@ struct LoopStage::Impl {
     Eigen::Vector3f t;
   };
   std::vector<FrameLink> links;
-  // First frame of each world after the first (front-end thread; read after the run).
-  std::vector<std::int64_t> world_starts;
-  int last_world_epoch = 0;
+  // First frame of each world after the first and its epoch (front-end thread, the mapper's;
+  // read there during the run and after it). An epoch may skip values (resets on frames the
+  // front end did not see).
+  std::vector<std::pair<std::int64_t, int>> world_starts;
+  int lastWorldEpoch() const { return world_starts.empty() ? 0 : world_starts.back().second; }
   // The world a frame was estimated in.
   int worldOf(std::int64_t frame) const {
-    return static_cast<int>(std::upper_bound(world_starts.begin(), world_starts.end(), frame) -
-                            world_starts.begin());
-  }
-  // The keyframe whose correction applies to a frame of `world` whose last keyframe at or before
-  // it is k: k itself, or after a reset the new world's first keyframe (-1: none yet).
-  int keyframeForWorld(std::size_t k, int world) const {
-    const std::vector<Keyframe>& kfs = closer->keyframes();
-    if (kfs[k].world_epoch == world) return static_cast<int>(k);
-    if (k + 1 < kfs.size() && kfs[k + 1].world_epoch == world) return static_cast<int>(k + 1);
-    return -1;
+    const auto it = std::upper_bound(
+        world_starts.begin(), world_starts.end(), frame,
+        [](std::int64_t f, const std::pair<std::int64_t, int>& w) { return f < w.first; });
+    return it == world_starts.begin() ? 0 : std::prev(it)->second;
   }
   // The corrections of the last solution (written by the back end after each solve, read by
   // the mapper during the run and by finish after it): per keyframe its frame, world and
@@ -97,6 +95,13 @@ struct LoopStage::Impl {
     std::vector<std::int64_t> frame;
     std::vector<int> world;
     std::vector<Eigen::Isometry3d> C;
+    // The keyframe whose correction applies to a frame of `world` whose last keyframe at or
+    // before it is k: k itself, or after a reset the new world's first keyframe (-1: none yet).
+    int keyframeForWorld(std::size_t k, int w) const {
+      if (world[k] == w) return static_cast<int>(k);
+      if (k + 1 < world.size() && world[k + 1] == w) return static_cast<int>(k + 1);
+      return -1;
+    }
   };
   std::mutex snap_mutex;
   std::shared_ptr<const Snapshot> snapshot;
@@ -155,8 +160,10 @@ struct LoopStage::Impl {
   Matrix6d correctedCovariance(std::size_t k) const;
   // Back end: keyframe done (with a new solution when `optimised`).
   void keyframeDone(bool optimised);
-  // The moves applied at frames in (after_frame, up_to_frame], composed: Delta_m ... Delta_1.
-  Eigen::Isometry3d appliedBetween(std::int64_t after_frame, std::int64_t up_to_frame) const;
+  // The moves of `moves` applied at frames in (after_frame, up_to_frame], composed:
+  // Delta_m ... Delta_1.
+  static Eigen::Isometry3d appliedBetween(const std::vector<Applied>& moves,
+                                          std::int64_t after_frame, std::int64_t up_to_frame);
   // Correction of keyframe k: T_corrected_k T_online_k^-1.
   Eigen::Isometry3d keyframeCorrection(std::size_t k) const {
     return closer->correctedKeyframes()[k] * closer->keyframes()[k].T_world_cam.inverse();
@@ -207,10 +214,11 @@ Matrix6d LoopStage::Impl::correctedCovariance(std::size_t k) const {
   return 0.5 * (cov + cov.transpose());
 }
 
-Eigen::Isometry3d LoopStage::Impl::appliedBetween(std::int64_t after_frame,
-                                                  std::int64_t up_to_frame) const {
+Eigen::Isometry3d LoopStage::Impl::appliedBetween(const std::vector<Applied>& moves,
+                                                  std::int64_t after_frame,
+                                                  std::int64_t up_to_frame) {
   Eigen::Isometry3d B = Eigen::Isometry3d::Identity();
-  for (const Applied& a : applied)
+  for (const Applied& a : moves)
     if (a.frame > after_frame && a.frame <= up_to_frame) B = a.delta * B;
   return B;
 }
@@ -328,10 +336,8 @@ Status LoopStage::process(FrameSlot& slot) {
   in.frame = slot.frame.index;
   in.t_ns = slot.frame.t_ns;
   in.world_epoch = slot.world_epoch;
-  if (slot.world_epoch != m.last_world_epoch) {
-    m.world_starts.push_back(slot.frame.index);
-    m.last_world_epoch = slot.world_epoch;
-  }
+  if (slot.world_epoch != m.lastWorldEpoch())
+    m.world_starts.emplace_back(slot.frame.index, slot.world_epoch);
   in.T_world_cam = slot.result.T_world_cam;
   in.motion_valid = slot.result.odometry.tracked;
   in.T_cur_prev = slot.result.odometry.T_cur_prev;
@@ -404,7 +410,7 @@ bool LoopStage::correctionBefore(std::int64_t frame, int world_epoch,
     }
   }
   if (due.kf_frame < 0) return false;
-  C_new_old = due.C * m.appliedBetween(due.kf_frame, frame).inverse();
+  C_new_old = due.C * Impl::appliedBetween(m.applied, due.kf_frame, frame).inverse();
   cov_world = due.cov;
   return true;
 }
@@ -423,17 +429,10 @@ bool LoopStage::Impl::frameCorrection(const Snapshot& snap, const std::vector<Ap
       it == snap.frame.begin() ? 0 : static_cast<std::size_t>(it - snap.frame.begin()) - 1;
   // After a reset, before the new world's first keyframe: that keyframe (none yet: no
   // correction).
-  const int world = worldOf(frame);
-  std::size_t k = k0;
-  if (snap.world[k0] != world) {
-    if (k0 + 1 >= snap.frame.size() || snap.world[k0 + 1] != world) return false;
-    k = k0 + 1;
-  }
-  // The moves applied at frames in (f_k, frame], composed: Delta_m ... Delta_1.
-  Eigen::Isometry3d B = Eigen::Isometry3d::Identity();
-  for (const Applied& a : moves)
-    if (a.frame > snap.frame[k] && a.frame <= frame) B = a.delta * B;
-  M = snap.C[k] * B.inverse();
+  const int k = snap.keyframeForWorld(k0, worldOf(frame));
+  if (k < 0) return false;
+  const std::size_t ks = static_cast<std::size_t>(k);
+  M = snap.C[ks] * appliedBetween(moves, snap.frame[ks], frame).inverse();
   return true;
 }
 
@@ -488,12 +487,13 @@ Status LoopStage::finish(const std::vector<MapLandmark>& map) {
       T = traj->poses[i];  // no loop closed: the online trajectory
     } else if (j < m.links.size() && m.links[j].t_ns == t &&
                static_cast<std::size_t>(m.links[j].kf) < kf.size() &&
-               m.closer->keyframes()[static_cast<std::size_t>(m.links[j].kf)].world_epoch !=
+               m.snapshot->world[static_cast<std::size_t>(m.links[j].kf)] !=
                    m.links[j].world_epoch) {
-      // After a reset, before the new world's first keyframe: that keyframe's correction.
-      const int k = m.keyframeForWorld(static_cast<std::size_t>(m.links[j].kf),
-                                       m.links[j].world_epoch);
-      T = k < 0 ? traj->poses[i] : m.keyframeCorrection(static_cast<std::size_t>(k)) * traj->poses[i];
+      // After a reset, before the new world's first keyframe: that keyframe's correction (the
+      // end state's snapshot, taken when the closer had solved).
+      const int k = m.snapshot->keyframeForWorld(static_cast<std::size_t>(m.links[j].kf),
+                                                 m.links[j].world_epoch);
+      T = k < 0 ? traj->poses[i] : m.snapshot->C[static_cast<std::size_t>(k)] * traj->poses[i];
     } else if (j < m.links.size() && m.links[j].t_ns == t &&
         static_cast<std::size_t>(m.links[j].kf) < kf.size()) {
       const std::size_t k = static_cast<std::size_t>(m.links[j].kf);
