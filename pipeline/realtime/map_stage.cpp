@@ -14,20 +14,6 @@
 #include "pipeline/run/run_outputs.hpp"
 
 namespace svslam::rt {
-namespace {
-// Tile (ti, tj) with no data (what a listener replaces a tile that is no longer there with).
-void emptyTile(const map::DemParams& p, int ti, int tj, map::DemRaster& out) {
-  const int n = p.tile_cells;
-  out.cell_m = p.cell_m;
-  out.i0 = ti * n;
-  out.j0 = tj * n;
-  if (out.cols != n || out.rows != n) out.resize(n, n);
-  std::fill(out.height_m.begin(), out.height_m.end(), NAN);
-  std::fill(out.sigma_m.begin(), out.sigma_m.end(), NAN);
-  std::fill(out.count.begin(), out.count.end(), 0.0f);
-  std::fill(out.luminance.begin(), out.luminance.end(), std::uint8_t{0});
-}
-}  // namespace
 
 MapStage::MapStage(const config::RunConfig& cfg, drivers::StereoSource& source, std::string out_dir,
                    drivers::LcmLink* lcm)
@@ -95,12 +81,16 @@ void MapStage::publishTiles(std::int64_t t_ns) {
     newest = std::max(newest, t.last_seq);
     if (t.last_seq <= published_seq_) continue;
     map_->tileRaster(t, tile_raster_);
-    if (!drivers::encodeMapTile(tile_raster_, t.ti, t.tj, t_ns, tiles_published_, tile_bytes_))
-      continue;
-    if (lcm_->publishRaw(cfg_.lcm.params.map_tile_channel, tile_bytes_.data(), tile_bytes_.size()))
-      ++tiles_published_;
+    sendTile(cfg_.lcm.params.map_tile_channel, t.ti, t.tj, t_ns, tiles_published_);
   }
   published_seq_ = newest;
+}
+
+void MapStage::sendTile(const std::string& channel, int ti, int tj, std::int64_t t_ns,
+                        std::int64_t& published) {
+  if (drivers::encodeMapTile(tile_raster_, ti, tj, t_ns, published, tile_bytes_) &&
+      lcm_->publishRaw(channel, tile_bytes_.data(), tile_bytes_.size()))
+    ++published;
 }
 
 void MapStage::requestSave(const std::string& dir, std::int64_t command_seq,
@@ -122,10 +112,7 @@ void MapStage::applySave(std::int64_t t_ns) {
     prefix = save_prefix_;
   }
   Status ws = writeFiles(dir);
-  if (ws) {
-    std::lock_guard<std::mutex> lock(replaced_mutex_);
-    if (replaced_) ws = writeReplacedFiles(*replaced_, dir);
-  }
+  if (ws && replaced_) ws = writeReplacedFiles(*replaced_, dir);
   if (!lcm_) return;
   drivers::CommandStatus cs;
   cs.t_ns = t_ns;
@@ -231,28 +218,20 @@ Status MapStage::replaceLive(
     // Every tile of the re-placed map, then an empty one (no data) for each tile of the last
     // re-placed map that this one no longer has: a listener that keeps the latest tile per
     // index holds exactly the re-placed map.
+    const std::string& channel = cfg_.lcm.params.map_tile_optimized_channel;
     std::set<std::pair<int, int>> sent;
     for (const map::DemTile& t : out->tiles()) {
       out->tileRaster(t, tile_raster_);
-      if (drivers::encodeMapTile(tile_raster_, t.ti, t.tj, t_ns, replaced_tiles_published_,
-                                 tile_bytes_) &&
-          lcm_->publishRaw(cfg_.lcm.params.map_tile_optimized_channel, tile_bytes_.data(),
-                           tile_bytes_.size()))
-        ++replaced_tiles_published_;
+      sendTile(channel, t.ti, t.tj, t_ns, replaced_tiles_published_);
       sent.emplace(t.ti, t.tj);
     }
     for (const auto& [ti, tj] : replaced_tiles_sent_) {
       if (sent.count({ti, tj}) != 0) continue;
-      emptyTile(map_->params(), ti, tj, tile_raster_);
-      if (drivers::encodeMapTile(tile_raster_, ti, tj, t_ns, replaced_tiles_published_,
-                                 tile_bytes_) &&
-          lcm_->publishRaw(cfg_.lcm.params.map_tile_optimized_channel, tile_bytes_.data(),
-                           tile_bytes_.size()))
-        ++replaced_tiles_published_;
+      out->emptyTileRaster(ti, tj, tile_raster_);
+      sendTile(channel, ti, tj, t_ns, replaced_tiles_published_);
     }
     replaced_tiles_sent_ = std::move(sent);
   }
-  std::lock_guard<std::mutex> lock(replaced_mutex_);
   replaced_ = std::move(out);  // the map save_map writes as *_optimized
   return Status::ok();
 }

@@ -80,6 +80,10 @@ class MapStage {
   const drivers::GeoOrigin* geoOrigin(drivers::GeoOrigin& storage) const;
   void applySave(std::int64_t t_ns);
   void publishTiles(std::int64_t t_ns);
+  // Encodes tile_raster_ as tile (ti, tj) and publishes it on `channel`; counts it in
+  // `published` (also its message seq) when sent.
+  void sendTile(const std::string& channel, int ti, int tj, std::int64_t t_ns,
+                std::int64_t& published);
 
   config::RunConfig cfg_;
   drivers::StereoSource& source_;
@@ -105,9 +109,8 @@ class MapStage {
   run::StageTimes times_;
   std::vector<std::int64_t> fused_frames_;  // source frame of each fusion (by sequence number)
   std::string replaced_json_;               // stats.json's map.replaced, the last re-placement
-  // Live re-placement (replaceLive): the last re-placed map (save_map writes it), the tiles it
-  // sent on LCM, counters.
-  std::mutex replaced_mutex_;
+  // Live re-placement (replaceLive): the last re-placed map (save_map writes it; mapper thread
+  // only, like applySave, or after the run), the tiles it sent on LCM, counters.
   std::unique_ptr<map::DemMap> replaced_;
   std::set<std::pair<int, int>> replaced_tiles_sent_;
   std::int64_t live_replacements_ = 0;

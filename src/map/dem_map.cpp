@@ -209,16 +209,20 @@ Status DemMap::toRaster(DemRaster& out) const {
   return Status::ok();
 }
 
-void DemMap::tileRaster(const DemTile& t, DemRaster& out) const {
+void DemMap::emptyTileRaster(int ti, int tj, DemRaster& out) const {
   const int n = params_.tile_cells;
   out.cell_m = params_.cell_m;
-  out.i0 = t.ti * n;
-  out.j0 = t.tj * n;
+  out.i0 = ti * n;
+  out.j0 = tj * n;
   if (out.cols != n || out.rows != n) out.resize(n, n);
   std::fill(out.height_m.begin(), out.height_m.end(), NAN);
   std::fill(out.sigma_m.begin(), out.sigma_m.end(), NAN);
   std::fill(out.count.begin(), out.count.end(), 0.0f);
   std::fill(out.luminance.begin(), out.luminance.end(), std::uint8_t{0});
+}
+
+void DemMap::tileRaster(const DemTile& t, DemRaster& out) const {
+  emptyTileRaster(t.ti, t.tj, out);
   fillRaster(t, out);
 }
 

@@ -110,6 +110,9 @@ class DemMap {
   Status toRaster(DemRaster& out) const;
   // One tile as an n x n raster.
   void tileRaster(const DemTile& tile, DemRaster& out) const;
+  // Tile (ti, tj) as an n x n raster with no data (NaN heights and sigmas, count and
+  // luminance 0), whether the map has it or not.
+  void emptyTileRaster(int ti, int tj, DemRaster& out) const;
   // Removes every tile (the map restarts empty; their memory is freed).
   void clear();
 
