@@ -3,14 +3,22 @@
 // StereoPointMatcher), with default parameters, on a rendered synthetic pair at 1024x768 (the
 // `svslam run` default source) and on a KITTI odometry pair (1226x370) when the data is present.
 // Items processed = corners detected (detect) or left points searched (stereo_match).
+// The keyframes' ORB extraction (features/orb_extractor.hpp with KeyframeParams::defaultOrb: loop
+// closing and relocalisation) on the rendered left images at 512x384 and 1024x768, with OpenCV's
+// cv::ORB (as many features, FAST threshold 15, 8 levels) on the same image as the reference;
+// items = keypoints.
 #include <benchmark/benchmark.h>
+
+#include <opencv2/features2d.hpp>
 
 #include <string>
 #include <vector>
 
 #include "drivers/source/stereo_source.hpp"
 #include "features/corner_detector.hpp"
+#include "features/orb_extractor.hpp"
 #include "features/stereo_point_matcher.hpp"
+#include "loop/keyframe.hpp"
 
 namespace {
 
@@ -87,6 +95,57 @@ void runStereoMatch(benchmark::State& st, const Pair& p) {
   st.SetItemsProcessed(items);
 }
 
+const Pair& synthetic512Pair() {
+  static const Pair p = loadPair("synthetic:width=512,height=384");
+  return p;
+}
+
+void runOrb(benchmark::State& st, const Pair& p) {
+  if (!p.error.empty()) {
+    st.SkipWithError(p.error.c_str());
+    return;
+  }
+  const auto& img = p.frame.left;
+  svslam::OrbExtractor orb(svslam::KeyframeParams::defaultOrb(), img.width(), img.height());
+  std::vector<svslam::OrbKeypoint> kps;
+  std::vector<svslam::OrbDescriptor> desc;
+  std::int64_t items = 0;
+  for (auto _ : st) {
+    (void)orb.process(img.cview(), kps, desc);
+    items += static_cast<std::int64_t>(kps.size());
+    benchmark::DoNotOptimize(desc.data());
+  }
+  st.counters["keypoints"] = static_cast<double>(kps.size());
+  st.SetItemsProcessed(items);
+}
+
+void runOpenCvOrb(benchmark::State& st, const Pair& p) {
+  if (!p.error.empty()) {
+    st.SkipWithError(p.error.c_str());
+    return;
+  }
+  const auto& img = p.frame.left;
+  const svslam::OrbParams op = svslam::KeyframeParams::defaultOrb();
+  const cv::Mat m(img.height(), img.width(), CV_8UC1, const_cast<std::uint8_t*>(img.cview().row(0)),
+                  static_cast<std::size_t>(img.cview().stride));
+  auto orb = cv::ORB::create(op.grid_cols * op.grid_rows * op.max_per_cell, 1.2f, 8, 31, 0, 2,
+                             cv::ORB::HARRIS_SCORE, 31, op.fast_threshold);
+  std::vector<cv::KeyPoint> kps;
+  cv::Mat desc;
+  std::int64_t items = 0;
+  for (auto _ : st) {
+    orb->detectAndCompute(m, cv::noArray(), kps, desc);
+    items += static_cast<std::int64_t>(kps.size());
+    benchmark::DoNotOptimize(desc.data);
+  }
+  st.counters["keypoints"] = static_cast<double>(kps.size());
+  st.SetItemsProcessed(items);
+}
+
+void BM_Orb_Synthetic512x384(benchmark::State& st) { runOrb(st, synthetic512Pair()); }
+void BM_OpenCvOrb_Synthetic512x384(benchmark::State& st) { runOpenCvOrb(st, synthetic512Pair()); }
+void BM_Orb_Synthetic1024x768(benchmark::State& st) { runOrb(st, syntheticPair()); }
+void BM_OpenCvOrb_Synthetic1024x768(benchmark::State& st) { runOpenCvOrb(st, syntheticPair()); }
 void BM_Detect_Synthetic1024x768(benchmark::State& st) { runDetect(st, syntheticPair()); }
 void BM_StereoMatch_Synthetic1024x768(benchmark::State& st) { runStereoMatch(st, syntheticPair()); }
 void BM_Detect_Kitti(benchmark::State& st) { runDetect(st, kittiPair()); }
@@ -96,6 +155,10 @@ BENCHMARK(BM_Detect_Synthetic1024x768)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StereoMatch_Synthetic1024x768)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Detect_Kitti)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StereoMatch_Kitti)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Orb_Synthetic512x384)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_OpenCvOrb_Synthetic512x384)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Orb_Synthetic1024x768)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_OpenCvOrb_Synthetic1024x768)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

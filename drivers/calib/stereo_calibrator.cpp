@@ -81,6 +81,7 @@ double coverage(const std::vector<std::vector<cv::Point2f>>& views, cv::Size siz
 struct Solve {
   double rms_l = 0, rms_r = 0, rms_pair = 0;
   cv::Mat K1, D1, K2, D2, R, T, per_view;  // per_view: N x 2 RMS (left, right), px
+  cv::Mat std_l;  // left camera: standard deviations of fx, fy, cx, cy, k1, ... (calibrateCamera)
 };
 
 Solve solve(const std::vector<std::vector<cv::Point3f>>& obj,
@@ -89,7 +90,9 @@ Solve solve(const std::vector<std::vector<cv::Point3f>>& obj,
   Solve s;
   std::vector<cv::Mat> rv, tv;
   const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-9);
-  s.rms_l = cv::calibrateCamera(obj, l, size, s.K1, s.D1, rv, tv, 0, crit);
+  cv::Mat std_extrinsics, per_view_l;
+  s.rms_l = cv::calibrateCamera(obj, l, size, s.K1, s.D1, rv, tv, s.std_l, std_extrinsics,
+                                per_view_l, 0, crit);
   s.rms_r = cv::calibrateCamera(obj, r, size, s.K2, s.D2, rv, tv, 0, crit);
   cv::Mat E, F;
   s.rms_pair = cv::stereoCalibrate(
@@ -248,6 +251,11 @@ Result<StereoCalibrationResult> StereoCalibrator::calibrate() const {
   res.rms_left_px = s.rms_l;
   res.rms_right_px = s.rms_r;
   res.rms_pair_px = s.rms_pair;
+  if (s.std_l.total() >= 4) {
+    const double scx = s.std_l.at<double>(2), scy = s.std_l.at<double>(3);
+    res.sigma_principal_point_left_px = std::sqrt(0.5 * (scx * scx + scy * scy));
+    res.sigma_f_left_rel = s.std_l.at<double>(0) / s.K1.at<double>(0, 0);
+  }
   res.file = {s.K1, s.D1.reshape(1, 1), s.K2,        s.D2.reshape(1, 1),
               s.R,  s.T.reshape(1, 3),  size_.width, size_.height};
   cv::stereoRectify(s.K1, s.D1, s.K2, s.D2, size_, s.R, s.T, res.R1, res.R2, res.P1, res.P2, res.Q,

@@ -67,6 +67,11 @@ struct StereoCalibrationResult {
   double rms_left_px = 0.0;       // calibrateCamera RMS reprojection error, left camera
   double rms_right_px = 0.0;      // same, right camera
   double rms_pair_px = 0.0;       // stereoCalibrate RMS over both views
+  // The left camera's calibrateCamera standard deviations: principal point (rms of cx and cy),
+  // px, and focal length relative to it: slam.calibration_sigma_principal_point_px and a part of
+  // slam.calibration_sigma_scale (slam/calibration_consider.hpp).
+  double sigma_principal_point_left_px = 0.0;
+  double sigma_f_left_rel = 0.0;
   double epipolar_mean_px = 0.0;  // mean |y_l - y_r| of rectified corners, px
   double epipolar_max_px = 0.0;   // max of the same
   double coverage_left = 0.0;     // fraction of 3x3 cells with corners, [0, 1]

@@ -119,6 +119,7 @@ SyntheticFlight::SyntheticFlight(const SyntheticFlightParams& p)
   calib_.cx_px = 0.5 * (p.width - 1);
   calib_.cy_px = 0.5 * (p.height - 1);
   calib_.baseline_m = p.baseline_m;
+  calib_.exact = true;  // the renderer projects with exactly this calibration
   period_ns_ = static_cast<TimeNs>(std::llround(1e9 / p.rate_hz));
   semi_a_m_ = p.loop_length_m / unitEllipsePerimeter(p.loop_aspect);
   semi_b_m_ = p.loop_aspect * semi_a_m_;

@@ -83,6 +83,14 @@ ConfigSection slamConfigSection() {
              "lost frames with points whose relocalisation failed before the loss is given up"),
       number("relocalise_min_inliers", SVSLAM_FIELD(slam.relocalisation.verify.min_inliers), 6,
              2000, "", "inliers of the 3D-3D motion against a keyframe to accept a pose"),
+      number("calibration_sigma_principal_point_px",
+             SVSLAM_FIELD(slam.calibration_uncertainty.sigma_principal_point_px), 0, 100, "px",
+             "standard deviation of the left camera's principal point (svslam calibrate reports "
+             "it): its error turns the camera frame, so the path; added to the published pose "
+             "covariance (not for rendered sources, whose calibration is exact)"),
+      number("calibration_sigma_scale", SVSLAM_FIELD(slam.calibration_uncertainty.sigma_scale), 0,
+             0.5, "", "relative standard deviation of the stereo depth scale (baseline, focal "
+             "length): scales the path; added to the published pose covariance"),
       flag("right_camera_check", SVSLAM_FIELD(slam.right_camera.enabled),
            "watch the right image (missing, flat, frozen) and fly on the left one alone while "
            "it is unusable (bearing-only SLAM)"),

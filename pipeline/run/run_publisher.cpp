@@ -42,7 +42,8 @@ Status RunPublisher::publish(const rt::FrameSlot& slot) {
     cov_line_.clear();  // keeps its capacity (reserved in open)
     char num[32];
     for (int i = 0; i < 36; ++i) {
-      std::snprintf(num, sizeof num, "%s%.9e", i ? " " : "", sr.pose_cov(i / 6, i % 6));
+      std::snprintf(num, sizeof num, "%s%.9e", i ? " " : "",
+                    sr.pose_cov(i / 6, i % 6) + sr.pose_cov_calibration(i / 6, i % 6));
       cov_line_ += num;
     }
     if (Status s = cov_file_.append(cov_line_); !s) return s;
@@ -67,7 +68,7 @@ Status RunPublisher::publish(const rt::FrameSlot& slot) {
   p.publish_t_ns = slot.frame.t_ns + (now - slot.stamps.capture_ns);  // source clock
   p.seq = slot.seq;
   p.T_world_cam = sr.T_world_cam;
-  p.cov = sr.pose_cov;
+  p.cov = sr.pose_cov + sr.pose_cov_calibration;
   p.status = sr.initializing          ? drivers::TrackingStatus::kInitializing
              : sr.mono                ? drivers::TrackingStatus::kMonocular
              : sr.odometry.frame == 0 ? drivers::TrackingStatus::kInitializing

@@ -227,6 +227,8 @@ int runCalibrate(const std::vector<std::string>& args) {
       .add("rms_left_px", res->rms_left_px)
       .add("rms_right_px", res->rms_right_px)
       .add("rms_pair_px", res->rms_pair_px)
+      .add("sigma_principal_point_left_px", res->sigma_principal_point_left_px)
+      .add("sigma_f_left_rel", res->sigma_f_left_rel, 6)
       .add("epipolar_mean_px", res->epipolar_mean_px)
       .add("epipolar_max_px", res->epipolar_max_px)
       .add("coverage_left", res->coverage_left, 3)

@@ -56,6 +56,9 @@ struct StereoCalibration {
   // estimator's online estimate of the pair's disparity offset (motion/disparity_offset.hpp);
   // 0 for a calibration as loaded.
   double disparity_offset_px = 0.0;
+  // The calibration is exact by construction (rendered images): no calibration uncertainty is
+  // added to the published pose covariance (slam/calibration_consider.hpp).
+  bool exact = false;
 
   PinholeCamera leftCamera() const { return {f_px, f_px, cx_px, cy_px, width, height}; }
   // Depth of a disparity (pixels, > 0): z = f b / d.

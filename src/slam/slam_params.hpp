@@ -2,6 +2,7 @@
 // Parameters of the EKF SLAM system (slam/slam_system.hpp: the steps the comments refer to).
 #include "core/status.hpp"
 #include "slam/bearing_initializer.hpp"
+#include "slam/calibration_consider.hpp"
 #include "slam/ekf_slam.hpp"
 #include "slam/relocaliser.hpp"
 #include "slam/right_camera_monitor.hpp"
@@ -98,6 +99,10 @@ struct SlamSystemParams {
   // Relocalisation after a real loss (slam/relocaliser.hpp; SlamSystem "Lost frames"): keyframes
   // kept while tracking is good, a lost frame's pose found against them. Stereo ekf mode.
   RelocaliserParams relocalisation;
+  // Uncertainty of the rig's calibration, carried into the published pose covariance
+  // (slam/calibration_consider.hpp; SlamFrameResult::pose_cov_calibration). A calibration
+  // marked exact (StereoCalibration::exact: rendered sources) adds nothing whatever these say.
+  CalibrationConsiderParams calibration_uncertainty{1.0, 0.002};
   Status validate() const;
 };
 

@@ -38,6 +38,8 @@ Status SlamSystemParams::validate() const {
     return Status::invalidArgument("slam.map_voxel_m must be > 0 and finite");
   if (Status s = relocalisation.validate(); !s)
     return Status::invalidArgument("slam.relocalise_* (" + s.message() + ")");
+  if (Status s = calibration_uncertainty.validate(); !s)
+    return Status::invalidArgument("slam." + s.message());
   // The bearing initialiser's and the monitor's own checks, named by their configuration keys.
   if (!(bearing_init.r_min_m > 0) || !(bearing_init.r_max_m > bearing_init.r_min_m) ||
       !std::isfinite(bearing_init.r_max_m))
@@ -86,6 +88,8 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
                        const StereoCalibration& calib, bool left_only)
     : params_(params),
       calib_(calib),
+      calib_consider_(calib.exact ? CalibrationConsiderParams{} : params.calibration_uncertainty,
+                      calib.f_px),
       vo_(odometry, calib),
       ekf_(params.ekf),
       landmarks_(params.patch_half_px, params.map_reserve, params.map_voxel_m),
@@ -97,6 +101,7 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
   init_status_ = params.validate();
   if (init_status_) init_status_ = vo_.initStatus();
   if (init_status_) init_status_ = ekf_.initStatus();
+  if (init_status_) init_status_ = calib_consider_.initStatus();
   if (init_status_) init_status_ = landmark_row_matcher_.initStatus();
   if (init_status_) init_status_ = bearing_init_.initStatus();
   if (init_status_) init_status_ = two_view_.initStatus();
@@ -175,6 +180,16 @@ void SlamSystem::passTracks() {
 }
 
 Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                           const StereoStageOutput& stereo, SlamFrameResult& out,
+                           Executor& executor, StageObserver* observer) {
+  if (Status s = processFrame(left, right, stereo, out, executor, observer); !s) return s;
+  if (out.initializing) return Status::ok();  // no pose yet: the covariance is uninformative
+  // The world origin (the first pose, exact) is where the calibration's error starts.
+  return calib_consider_.process(anchor_pose_, out.T_world_cam, out.pose_cov_calibration);
+}
+
+Status SlamSystem::processFrame(ImageView<const std::uint8_t> left,
+                                ImageView<const std::uint8_t> right,
                            const StereoStageOutput& stereo, SlamFrameResult& out,
                            Executor& executor, StageObserver* observer) {
   if (!init_status_) return init_status_;

@@ -154,6 +154,10 @@ class SlamSystem final : public Estimator {
                              Eigen::Isometry3d& moved) override;
 
  private:
+  // process() without the calibration's covariance (added by process for every mode).
+  Status processFrame(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                      const StereoStageOutput& stereo, SlamFrameResult& out, Executor& executor,
+                      StageObserver* observer);
   // Whether (u, v) lies within landmark_exclusion_px of one of `landmarks_uv` (px).
   bool nearLandmark(const std::vector<Eigen::Vector2f>& landmarks_uv, float u, float v) const;
   void passTracks();
@@ -246,6 +250,7 @@ class SlamSystem final : public Estimator {
 
   SlamSystemParams params_;
   StereoCalibration calib_;
+  CalibrationConsider calib_consider_;
   Status init_status_;
   StereoOdometry vo_;
   EkfSlam ekf_;

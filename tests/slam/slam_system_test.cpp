@@ -26,6 +26,7 @@ namespace {
 struct RunOut {
   std::vector<Eigen::Isometry3d> est, vo, gt;
   std::vector<Matrix6d> cov;
+  std::vector<Matrix6d> cov_calibration;
   std::vector<TimeNs> t_ns;
   int max_in_state = 0;
   int reperceived = 0;
@@ -34,12 +35,15 @@ struct RunOut {
   std::vector<MapLandmark> map;
 };
 
-RunOut runSlam(const std::string& spec, const SlamSystemParams& sp, int max_frames = 0) {
+// `inexact`: the source's calibration taken as not exact (its uncertainty is then published).
+RunOut runSlam(const std::string& spec, const SlamSystemParams& sp, int max_frames = 0,
+               bool inexact = false) {
   RunOut r;
   auto src = drivers::openStereoSource(spec);
   EXPECT_TRUE(src.isOk()) << src.status().message();
   if (!src) return r;
-  const StereoCalibration calib = (*src)->calibration();
+  StereoCalibration calib = (*src)->calibration();
+  if (inexact) calib.exact = false;
   FrameByFrame slam(StereoOdometryParams{}, calib,
                     std::make_unique<SlamSystem>(sp, StereoOdometryParams{}, calib));
   EXPECT_TRUE(slam.initStatus().isOk()) << slam.initStatus().message();
@@ -55,6 +59,7 @@ RunOut runSlam(const std::string& spec, const SlamSystemParams& sp, int max_fram
     r.est.push_back(out.T_world_cam);
     r.vo.push_back(out.odometry.T_first_cam);
     r.cov.push_back(out.pose_cov);
+    r.cov_calibration.push_back(out.pose_cov_calibration);
     r.t_ns.push_back(f.t_ns);
     r.max_in_state = std::max(r.max_in_state, out.landmarks_in_state);
     r.reperceived += out.reperceived;
@@ -209,6 +214,37 @@ TEST(SlamSystem, SameInputSameOutput) {
     EXPECT_TRUE(a.est[i].matrix() == b.est[i].matrix()) << "frame " << i;
     EXPECT_TRUE(a.cov[i] == b.cov[i]) << "frame " << i;
   }
+}
+
+// The calibration's uncertainty (slam/calibration_consider.hpp) is published beside the filter's
+// covariance, from the world origin (the first pose), and never enters the filter: the same
+// poses and filter covariances with and without it; none for a rendered (exact) calibration.
+TEST(SlamSystem, CalibrationUncertaintyIsPublishedBesideTheFilter) {
+  SlamSystemParams p;
+  p.calibration_uncertainty.sigma_principal_point_px = 1.5;
+  p.calibration_uncertainty.sigma_scale = 0.004;
+  const std::string spec = "synthetic:width=320,height=240,frames=12";
+  const RunOut exact = runSlam(spec, p);
+  const RunOut inexact = runSlam(spec, p, 0, /*inexact=*/true);
+  ASSERT_EQ(exact.est.size(), 12u);
+  ASSERT_EQ(inexact.est.size(), 12u);
+  auto src = drivers::openStereoSource(spec);
+  ASSERT_TRUE(src.isOk());
+  const CalibrationConsider model(p.calibration_uncertainty, (*src)->calibration().f_px);
+  for (std::size_t i = 0; i < exact.est.size(); ++i) {
+    EXPECT_TRUE(exact.est[i].matrix() == inexact.est[i].matrix()) << "frame " << i;
+    EXPECT_TRUE(exact.cov[i] == inexact.cov[i]) << "frame " << i;
+    EXPECT_EQ(exact.cov_calibration[i].cwiseAbs().maxCoeff(), 0.0) << "frame " << i;
+    Matrix6d expected;
+    ASSERT_TRUE(model.process(Eigen::Isometry3d::Identity(), inexact.est[i], expected));
+    EXPECT_LT((inexact.cov_calibration[i] - expected).cwiseAbs().maxCoeff(), 1e-15);
+  }
+  // It grows with the path: at the last frame the scale's part alone is (0.004 d)^2.
+  const double d = inexact.est.back().translation().norm();
+  ASSERT_GT(d, 5.0);
+  const Eigen::Matrix3d position = inexact.cov_calibration.back().bottomRightCorner<3, 3>();
+  EXPECT_GE(position.trace(), 0.004 * 0.004 * d * d * (1 - 1e-9));
+  EXPECT_EQ(inexact.cov_calibration.front().cwiseAbs().maxCoeff(), 0.0);  // the origin
 }
 
 TEST(SlamSystem, KittiNoWorseThanOdometry) {
