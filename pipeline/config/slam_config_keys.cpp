@@ -69,7 +69,7 @@ ConfigSection slamConfigSection() {
              "prediction covariance (translation) when the VME fails"),
       flag("relocalise", SVSLAM_FIELD(slam.relocalisation.enabled),
            "keep keyframes while tracking is good and find a lost frame's pose against them "
-           "(ekf mode; needs dense_stereo.enabled); a keyframe's ORB costs 70-190 ms on the "
+           "(ekf mode; needs dense_stereo.enabled); a keyframe's ORB costs 44-167 ms on the "
            "estimator's thread (docs/slam.md)"),
       number("relocalise_keyframes", SVSLAM_FIELD(slam.relocalisation.max_keyframes), 1, 100000,
              "", "keyframes kept for relocalisation (a ring: the oldest replaced)"),

@@ -142,7 +142,15 @@ class OrbExtractor {
   void resampleLayer(int k);
   void smoothLayer(int k);
   int lazyScore(int k, int x, int y);  // k = -1: FAST 5-8 on c_0
+  // An upper bound of layer k's score (k >= 0) without computing it where it is not needed:
+  // the cached score; threshold - 1 for a pixel the scan tested and found no corner (a pixel
+  // that is not a corner at t scores below t); the score itself elsewhere.
+  int scoreBound(int k, int x, int y);
   float sampleScore(int j, double x, double y);
+  // Whether layer j's grid point (gx, gy) (layer-k px of candidate c) can suppress c: its
+  // bilinear score bound first (monotone in the four scores), the score only when the bound
+  // would suppress. Suppresses when the score > s, or >= s with or_equal.
+  bool suppresses(const Candidate& c, int j, int gx, int gy, bool or_equal);
   void sampleGrid(const Candidate& c, int j, float v[9]);
   bool suppressAndRefine(Candidate& c);
   float orientation(const Layer& l, int x, int y) const;

@@ -60,6 +60,19 @@ int OrbExtractor::lazyScore(int k, int x, int y) {
   return s;
 }
 
+int OrbExtractor::scoreBound(int k, int x, int y) {
+  Layer& l = layers_[static_cast<std::size_t>(k)];
+  const int w = l.image.width(), h = l.image.height();
+  if (x < 3 || y < 3 || x >= w - 3 || y >= h - 3) return 0;  // as lazyScore
+  const std::uint8_t s = l.score(x, y);
+  if (s != kUnknownScore) return s;
+  // The scan (process) tested every pixel kBorderPx (>= 3) from the border and cached the
+  // score of each corner, so an unknown score there is a non-corner's.
+  if (x >= kBorderPx && y >= kBorderPx && x < w - kBorderPx && y < h - kBorderPx)
+    return params_.fast_threshold - 1;
+  return lazyScore(k, x, y);
+}
+
 // Bilinear interpolation of layer j's scores at (x, y) in layer-j px (clamped to the layer).
 float OrbExtractor::sampleScore(int j, double x, double y) {
   const Layer& l = layers_[static_cast<std::size_t>(j)];
@@ -87,25 +100,53 @@ void OrbExtractor::sampleGrid(const Candidate& c, int j, float v[9]) {
     }
 }
 
+bool OrbExtractor::suppresses(const Candidate& c, int j, int gx, int gy, bool or_equal) {
+  const float s = c.score;
+  if (j == c.layer) {
+    const float bound = static_cast<float>(scoreBound(j, gx, gy));
+    if (bound < s || (!or_equal && bound == s)) return false;
+    const float q = static_cast<float>(lazyScore(j, gx, gy));
+    return q > s || (or_equal && q == s);
+  }
+  const Layer& l = layers_[static_cast<std::size_t>(j)];
+  const double ratio = layerScale(c.layer) / layerScale(j);
+  const int w = l.image.width(), h = l.image.height();
+  const double x = std::clamp((gx + 0.5) * ratio - 0.5, 0.0, w - 1.0);
+  const double y = std::clamp((gy + 0.5) * ratio - 0.5, 0.0, h - 1.0);
+  // sampleScore's interpolation with bounds in place of scores: >= its value, operation by
+  // operation (non-negative weights, rounding is monotone).
+  const int x0 = std::min(static_cast<int>(x), w - 2), y0 = std::min(static_cast<int>(y), h - 2);
+  const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+  const float top = (1 - fx) * scoreBound(j, x0, y0) + fx * scoreBound(j, x0 + 1, y0);
+  const float bottom = (1 - fx) * scoreBound(j, x0, y0 + 1) + fx * scoreBound(j, x0 + 1, y0 + 1);
+  const float bound = (1 - fy) * top + fy * bottom;
+  if (bound < s || (!or_equal && bound == s)) return false;
+  const float q = sampleScore(j, (gx + 0.5) * ratio - 0.5, (gy + 0.5) * ratio - 0.5);
+  return q > s || (or_equal && q == s);
+}
+
 bool OrbExtractor::suppressAndRefine(Candidate& c) {
-  const int k = c.layer, s = static_cast<int>(c.score);
-  float in[9], above[9], below[9];
-  sampleGrid(c, k, in);
+  const int k = c.layer;
+  const bool has_above = k + 1 < numLayers();
+  // Non-maximum suppression first, on bounds (most candidates of a textured image lose to a
+  // neighbour, and most of their neighbours are no corners): the same decisions as comparing
+  // every score, without computing the scores that cannot decide.
   for (int i = 0; i < 9; ++i) {
     if (i == 4) continue;
-    const float q = in[i];
-    if (q > s || (q == s && i < 4)) return false;  // ties: first in raster order wins
+    // Ties: first in raster order wins.
+    if (suppresses(c, k, c.x + i % 3 - 1, c.y + i / 3 - 1, i < 4)) return false;
   }
-  const bool has_above = k + 1 < numLayers();
-  if (has_above) {
-    sampleGrid(c, k + 1, above);
-    for (float q : above)
-      if (q > s) return false;
-  }
-  sampleGrid(c, k - 1, below);  // k = 0: the virtual layer d_{-1}, not a suppressor
-  if (k > 0)
-    for (float q : below)
-      if (q >= s) return false;
+  if (has_above)
+    for (int i = 0; i < 9; ++i)
+      if (suppresses(c, k + 1, c.x + i % 3 - 1, c.y + i / 3 - 1, false)) return false;
+  if (k > 0)  // k = 0: the virtual layer d_{-1} below is not a suppressor
+    for (int i = 0; i < 9; ++i)
+      if (suppresses(c, k - 1, c.x + i % 3 - 1, c.y + i / 3 - 1, true)) return false;
+  // A maximum: the scores of the three grids for the refinement.
+  float in[9], above[9], below[9];
+  sampleGrid(c, k, in);
+  if (has_above) sampleGrid(c, k + 1, above);
+  sampleGrid(c, k - 1, below);
 
   const double tk = layerScale(k);
   auto level0 = [&](int p, double offset) { return (p + offset + 0.5) * tk - 0.5; };

@@ -18,7 +18,7 @@
 // covariance and the constraint's (loop/relative_pose.hpp's inversion and product Jacobians).
 // The ring bounds memory (about 25 kB a keyframe: 400 points of 48 bytes, no BoW vector) and
 // the work of a lost frame (max_candidates verifications). The cost is the keyframes' ORB
-// extraction on the caller's thread (70 ms at 512x384, 190 ms at 1024x768 on the 2-core VM),
+// extraction on the caller's thread (44 ms at 512x384, 167 ms at 1024x768 on the 2-core VM),
 // which is why SlamSystem leaves it off unless asked.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -36,7 +36,7 @@ namespace svslam {
 
 struct RelocaliserParams {
   // Keep keyframes and relocalise lost frames. Off by default: a keyframe's ORB extraction
-  // (features/orb_extractor.hpp) costs 70 ms at 512x384 and 190 ms at 1024x768 on the
+  // (features/orb_extractor.hpp) costs 44 ms at 512x384 and 167 ms at 1024x768 on the
   // estimator's thread, a spike every few frames (docs/slam.md "Lost frames").
   bool enabled = false;
   KeyframeParams keyframe;  // rule and content of the keyframes (loop closing's defaults)

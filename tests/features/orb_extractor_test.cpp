@@ -87,6 +87,30 @@ TEST(OrbFast, ScoreIsLargestThresholdStillCorner) {
   EXPECT_EQ(fastCornerScore(dot.cview(), 0, 4, FastMask::k5of8), 0);
 }
 
+// The branch-free score (what the detector uses) against the windowed reference with early exits
+// (OpenCV's cornerScore scheme), on every pixel: random texture, a binary 0/255 pattern (the
+// extremes of the 16-bit differences) and flat areas.
+TEST(OrbFast, BranchlessScoreEqualsTheReferenceOnEveryPixel) {
+  cv::Mat binary(64, 64, CV_8UC1);
+  cv::randu(binary, 0, 2);
+  binary *= 255;
+  cv::Mat flat(32, 32, CV_8UC1, cv::Scalar(77));
+  for (const cv::Mat& m : {texture(200, 150, 11), binary, flat}) {
+    const ImageU8 img = toImage(m);
+    const auto o16 = fastOffsets16(img.stride());
+    const auto o8 = fastOffsets8(img.stride());
+    int wrong16 = 0, wrong8 = 0;
+    for (int y = 3; y < m.rows - 3; ++y)
+      for (int x = 3; x < m.cols - 3; ++x) {
+        const std::uint8_t* p = img.row(y) + x;
+        wrong16 += fast_detail::scoreBranchless<16>(p, o16) != fast_detail::score<16>(p, o16);
+        wrong8 += fast_detail::scoreBranchless<8>(p, o8) != fast_detail::score<8>(p, o8);
+      }
+    EXPECT_EQ(wrong16, 0);
+    EXPECT_EQ(wrong8, 0);
+  }
+}
+
 // ---- pyramid --------------------------------------------------------------------------------
 
 TEST(OrbPyramid, LayerSizesFollowTable1AndMapCentres) {
