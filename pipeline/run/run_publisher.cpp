@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "slam/pose_jacobians.hpp"
+
 namespace svslam::run {
 
 RunPublisher::RunPublisher(const config::RunConfig& cfg, const std::string& out_dir,
@@ -68,7 +70,8 @@ Status RunPublisher::publish(const rt::FrameSlot& slot) {
   p.publish_t_ns = slot.frame.t_ns + (now - slot.stamps.capture_ns);  // source clock
   p.seq = slot.seq;
   p.T_world_cam = sr.T_world_cam;
-  p.cov = sr.pose_cov + sr.pose_cov_calibration;
+  // pose_t's convention: the right-multiplied error in the camera frame (lcm/pose_t.lcm).
+  p.cov = cameraFrameCovariance(sr.T_world_cam, sr.pose_cov + sr.pose_cov_calibration);
   p.status = sr.initializing          ? drivers::TrackingStatus::kInitializing
              : sr.mono                ? drivers::TrackingStatus::kMonocular
              : sr.odometry.frame == 0 ? drivers::TrackingStatus::kInitializing

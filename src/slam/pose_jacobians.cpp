@@ -24,6 +24,14 @@ Vector6d boxMinus(const Eigen::Isometry3d& T, const Eigen::Isometry3d& T_hat) {
   return d;
 }
 
+Matrix6d cameraFrameCovariance(const Eigen::Isometry3d& T_world_cam, const Matrix6d& P_world) {
+  Matrix6d B = Matrix6d::Zero();
+  B.topLeftCorner<3, 3>() = T_world_cam.linear();
+  B.bottomRightCorner<3, 3>() = T_world_cam.linear();
+  Matrix6d P = B.transpose() * P_world * B;
+  return 0.5 * (P + P.transpose());
+}
+
 Eigen::Isometry3d predictPose(const Eigen::Isometry3d& T_world_cam,
                               const Eigen::Isometry3d& T_cur_prev) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();

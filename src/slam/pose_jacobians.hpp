@@ -53,6 +53,13 @@ Eigen::Vector3d observeLandmark(const Eigen::Isometry3d& T_world_cam,
 void observationJacobians(const Eigen::Isometry3d& T_world_cam, const Eigen::Vector3d& m_world,
                           Matrix36d& H_pose, Eigen::Matrix3d& H_m);
 
+// The covariance of a pose error in the filter's convention (world frame, left: boxPlus) as the
+// covariance of the right-multiplied camera-frame error of LCM's pose_t, T = T_hat exp(xi),
+// xi = [dtheta_c; rho]: to first order R = R_hat exp([dtheta_c]x) = exp([R_hat dtheta_c]x) R_hat
+// and t = t_hat + R_hat rho, so xi = B^T d with B = diag(R_hat, R_hat), and the covariance is
+// B^T P_world B.
+Matrix6d cameraFrameCovariance(const Eigen::Isometry3d& T_world_cam, const Matrix6d& P_world);
+
 // Initialisation model: the world position of a point z_cam (m) of the camera frame.
 Eigen::Vector3d initLandmark(const Eigen::Isometry3d& T_world_cam, const Eigen::Vector3d& z_cam);
 void initJacobians(const Eigen::Isometry3d& T_world_cam, const Eigen::Vector3d& z_cam,

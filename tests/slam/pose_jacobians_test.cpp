@@ -17,6 +17,33 @@ using Eigen::Vector3d;
 using ekf_test::numericJacobian;
 using ekf_test::pose;
 
+// The camera-frame covariance of LCM's pose_t: the right-multiplied error xi of a pose perturbed
+// in the filter's convention, xi = [log(R_hat^T R), R_hat^T (t - t_hat)], differentiated
+// numerically, is B^T d; the covariance is that map applied to P.
+TEST(PoseJacobians, CameraFrameCovarianceIsTheRightMultipliedError) {
+  const Isometry3d T_hat = pose({0.6, -1.1, 0.4}, {3, -2, 7});
+  const auto J = numericJacobian<6, 6>([&](const Vector6d& d) {
+    const Isometry3d T = boxPlus(T_hat, d);
+    const Eigen::AngleAxisd aa(T_hat.linear().transpose() * T.linear());
+    Vector6d xi;
+    xi.head<3>() = aa.angle() * aa.axis();
+    xi.tail<3>() = T_hat.linear().transpose() * (T.translation() - T_hat.translation());
+    return xi;
+  });
+  Matrix6d A = Matrix6d::Random();
+  const Matrix6d P = A * A.transpose() + Matrix6d::Identity();
+  const Matrix6d expected = J * P * J.transpose();
+  EXPECT_LT((cameraFrameCovariance(T_hat, P) - expected).cwiseAbs().maxCoeff(), 1e-7);
+  // Invariants: the same trace per block (a rotation of each block), the identity pose keeps it.
+  const Matrix6d C = cameraFrameCovariance(T_hat, P);
+  const double c_rot = C.topLeftCorner<3, 3>().trace(), p_rot = P.topLeftCorner<3, 3>().trace();
+  const double c_pos = C.bottomRightCorner<3, 3>().trace();
+  const double p_pos = P.bottomRightCorner<3, 3>().trace();
+  EXPECT_NEAR(c_rot, p_rot, 1e-12);
+  EXPECT_NEAR(c_pos, p_pos, 1e-12);
+  EXPECT_LT((cameraFrameCovariance(Isometry3d::Identity(), P) - P).cwiseAbs().maxCoeff(), 1e-15);
+}
+
 TEST(PoseJacobians, PredictionMatchesNumericalDifferentiation) {
   const Isometry3d T = pose({0.3, -0.7, 0.2}, {4, -1, 2}),
                    u = pose({0.05, 0.02, -0.1}, {0.5, 0.1, 1.3});
