@@ -69,10 +69,16 @@ ConfigSection slamConfigSection() {
              "prediction covariance (translation) when the VME fails"),
       flag("relocalise", SVSLAM_FIELD(slam.relocalisation.enabled),
            "keep keyframes while tracking is good and find a lost frame's pose against them "
-           "(ekf mode; needs dense_stereo.enabled); a keyframe's ORB costs 44-167 ms on the "
-           "estimator's thread (docs/slam.md)"),
+           "(ekf mode; needs dense_stereo.enabled; docs/slam.md)"),
       number("relocalise_keyframes", SVSLAM_FIELD(slam.relocalisation.max_keyframes), 1, 100000,
              "", "keyframes kept for relocalisation (a ring: the oldest replaced)"),
+      number("relocalise_pending_keyframes",
+             SVSLAM_FIELD(slam.relocalisation.pending_keyframes), 0, 100, "",
+             "newest keyframes kept as image and disparity and built (ORB, 44-167 ms each) only "
+             "when a lost frame needs them; 0 builds each keyframe on the estimator's thread"),
+      number("relocalise_builds_per_frame",
+             SVSLAM_FIELD(slam.relocalisation.max_builds_per_frame), 1, 100, "",
+             "pending keyframes built per lost frame at most (the nearest first)"),
       number("relocalise_candidates", SVSLAM_FIELD(slam.relocalisation.max_candidates), 1, 1000,
              "", "keyframes verified per lost frame, nearest the predicted position first"),
       number("relocalise_min_landmarks", SVSLAM_FIELD(slam.relocalisation.min_landmarks), 0,

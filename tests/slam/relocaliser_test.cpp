@@ -78,11 +78,23 @@ class RelocaliserTest : public ::testing::Test {
   const DisparityResult* d_ = nullptr;
 };
 
+// Both ways of keeping keyframes: built when kept (pending_keyframes 0), and pending (the
+// default: built when the lost frame needs them).
 TEST_F(RelocaliserTest, LostFrameIsFoundAgainstTheKeptKeyframes) {
-  Relocaliser reloc(RelocaliserParams{}, flight_.calibration());
+  for (int pending : {0, 4}) {
+  SCOPED_TRACE("pending_keyframes " + std::to_string(pending));
+  RelocaliserParams p;
+  p.pending_keyframes = pending;
+  Relocaliser reloc(p, flight_.calibration());
   ASSERT_TRUE(reloc.initStatus().isOk()) << reloc.initStatus().message();
   keep(reloc, 30);
-  EXPECT_GE(reloc.keyframes(), 5);
+  if (pending == 0) {
+    EXPECT_GE(reloc.keyframes(), 5);
+    EXPECT_EQ(reloc.pendingKeyframes(), 0);
+  } else {
+    EXPECT_EQ(reloc.keyframes(), 0);  // nothing built while tracking
+    EXPECT_EQ(reloc.pendingKeyframes(), pending);
+  }
   for (int frame : {32, 35}) {
     render(frame);
     Eigen::Isometry3d pred = truth(frame);
@@ -106,6 +118,11 @@ TEST_F(RelocaliserTest, LostFrameIsFoundAgainstTheKeptKeyframes) {
     EXPECT_LT(dt, 0.2);  // one 3D-3D constraint at 27 m; the filter's landmarks refine it
     EXPECT_LT(dr, 0.2);
     EXPECT_LT(nees, 22.46);  // chi2, 6 dof, 99.9 %
+  }
+  if (pending > 0) {  // the candidates tried were built and kept, the others still pending
+    EXPECT_GE(reloc.keyframes(), 1);
+    EXPECT_EQ(reloc.keyframes() + reloc.pendingKeyframes(), pending);
+  }
   }
 }
 
@@ -140,6 +157,7 @@ TEST_F(RelocaliserTest, NoPoseWhereNoKeyframeSawTheGroundOrInABlackFrame) {
 TEST_F(RelocaliserTest, RingKeepsItsBoundAndBadInputIsNamed) {
   RelocaliserParams p;
   p.max_keyframes = 3;
+  p.pending_keyframes = 0;  // every keyframe built into the ring of 3
   Relocaliser reloc(p, flight_.calibration());
   ASSERT_TRUE(reloc.initStatus().isOk());
   keep(reloc, 40);
@@ -157,9 +175,21 @@ TEST_F(RelocaliserTest, RingKeepsItsBoundAndBadInputIsNamed) {
   bool kept = false;
   EXPECT_EQ(reloc.offer(l_, *d_, bad, Eigen::Matrix<double, 6, 6>::Zero(), 39, kept).code(),
             StatusCode::kInvalidArgument);
+  // A pending keyframe is copied: a disparity of another size is named, nothing kept.
+  Relocaliser lazy(RelocaliserParams{}, flight_.calibration());
+  DisparityResult small;
+  small.disparity_px.resize(8, 8);
+  small.sigma_d_px.resize(8, 8);
+  const Status s = lazy.offer(l_, small, truth(39), Eigen::Matrix<double, 6, 6>::Zero(), 39, kept);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("calibration size"), std::string::npos) << s.message();
+  EXPECT_EQ(lazy.pendingKeyframes(), 0);
   for (auto mutate : {+[](RelocaliserParams& q) { q.max_keyframes = 0; },
                       +[](RelocaliserParams& q) { q.max_candidates = 0; },
                       +[](RelocaliserParams& q) { q.max_lost_frames = 0; },
+                      +[](RelocaliserParams& q) { q.pending_keyframes = -1; },
+                      +[](RelocaliserParams& q) { q.pending_keyframes = 101; },
+                      +[](RelocaliserParams& q) { q.max_builds_per_frame = 0; },
                       +[](RelocaliserParams& q) { q.verify.min_inliers = 2; }}) {
     RelocaliserParams q;
     mutate(q);
