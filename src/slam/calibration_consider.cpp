@@ -3,6 +3,8 @@
 #include <cmath>
 #include <string>
 
+#include "slam/pose_jacobians.hpp"
+
 namespace svslam {
 
 Status CalibrationConsiderParams::validate() const {
@@ -34,8 +36,7 @@ Status CalibrationConsider::process(const Eigen::Isometry3d& T_world_origin,
   const Eigen::Matrix3d R = T_oc.linear();
   const Eigen::Vector3d t = T_oc.translation();
   const Eigen::Matrix3d R_wo = T_world_origin.linear();
-  Eigen::Matrix3d t_x;
-  t_x << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+  const Eigen::Matrix3d t_x = hatSO3(t);
   // Columns theta_x, theta_y (theta_z has no variance), s.
   Eigen::Matrix<double, 6, 3> J;
   J.topLeftCorner<3, 2>() = (R_wo * (R - Eigen::Matrix3d::Identity())).leftCols<2>();
