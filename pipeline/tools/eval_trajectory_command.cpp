@@ -15,13 +15,25 @@
 #include "pipeline/tools/stereo_case.hpp"
 
 namespace svslam::cli {
+namespace {
+
+std::string vec3Json(const Eigen::Vector3d& v) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "[%.6f, %.6f, %.6f]", v.x(), v.y(), v.z());
+  return buf;
+}
+
+}  // namespace
 
 int runEvalTrajectory(const std::vector<std::string>& args) {
   ArgParser p(
       "eval-trajectory",
       "Scores an estimated camera trajectory against ground truth and prints JSON: KITTI\n"
       "devkit segment drift (translation %, rotation deg/m) per length and on average, ATE\n"
-      "RMSE after alignment, frame-to-frame RPE, final position and attitude error.\n"
+      "RMSE after alignment, frame-to-frame RPE, final position and attitude error, and the\n"
+      "rotation about the first camera centre that best lays the estimate on the ground truth\n"
+      "(start_rotation_*: an early attitude error every later pose inherits) with the ATE and\n"
+      "final error left after it (the trajectory's shape error).\n"
       "Files: KITTI poses (3x4 per line, paired by index) or TUM (t tx ty tz qx qy qz qw,\n"
       "paired by nearest stamp); EuRoC body ground truth becomes cam0 with --body-to-cam.");
   p.addOption("gt", "FILE", "ground-truth trajectory (KITTI or TUM)", std::nullopt, true);
@@ -154,7 +166,11 @@ int runEvalTrajectory(const std::vector<std::string>& args) {
       .add("rpe_trans_rmse_m", m->rpe_trans_rmse_m)
       .add("rpe_rot_rmse_deg", m->rpe_rot_rmse_deg)
       .add("final_pos_err_m", m->final_pos_err_m)
-      .add("final_att_err_deg", m->final_att_err_deg);
+      .add("final_att_err_deg", m->final_att_err_deg)
+      .add("start_rotation_deg", m->start_rotation_deg, 6)
+      .addRaw("start_rotation_axis", vec3Json(m->start_rotation_axis))
+      .add("ate_after_start_rotation_m", m->ate_after_start_rotation_m)
+      .add("final_pos_err_after_start_rotation_m", m->final_pos_err_after_start_rotation_m);
   if (!covs.empty()) {
     auto nees = evaluateNees(g, e, covs);
     if (!nees) return fail(nees.status());

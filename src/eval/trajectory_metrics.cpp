@@ -163,6 +163,28 @@ Result<TrajectoryMetrics> evaluateTrajectory(const std::vector<Eigen::Isometry3d
     ate += (est_aligned[i].translation() - gt_ref[i].translation()).squaredNorm();
   m.ate_rmse_m = std::sqrt(ate / static_cast<double>(n));
   m.final_pos_err_m = (est_aligned[n - 1].translation() - gt_ref[n - 1].translation()).norm();
+  // Rotation about the start (see the header): Kabsch without centring.
+  {
+    const Eigen::Isometry3d g0 = gt[0].inverse(), e0 = est[0].inverse();
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    std::vector<Eigen::Vector3d> pg(n), pe(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      pg[i] = (g0 * gt[i]).translation();
+      pe[i] = (e0 * est[i]).translation();
+      H += pg[i] * pe[i].transpose();
+    }
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
+    if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) S(2, 2) = -1;
+    const Eigen::Matrix3d Q = svd.matrixU() * S * svd.matrixV().transpose();
+    const Eigen::AngleAxisd aa(Q);
+    m.start_rotation_deg = kRadToDeg * aa.angle();
+    if (aa.angle() > 0) m.start_rotation_axis = aa.axis();
+    double sum = 0;
+    for (std::size_t i = 0; i < n; ++i) sum += (pg[i] - Q * pe[i]).squaredNorm();
+    m.ate_after_start_rotation_m = std::sqrt(sum / static_cast<double>(n));
+    m.final_pos_err_after_start_rotation_m = (pg[n - 1] - Q * pe[n - 1]).norm();
+  }
   // Attitude from the poses relative to the first one, whatever the alignment: a position-only
   // alignment leaves the roll about a straight path unobservable.
   const Eigen::Matrix3d R_est = est[0].linear().transpose() * est[n - 1].linear();

@@ -36,6 +36,16 @@ struct TrajectoryMetrics {
   double final_att_err_deg = 0;  // of the last pose relative to the first (alignment-free)
   double path_length_m = 0;  // ground truth
   double align_scale = 1;    // the Sim(3) alignment's scale (1 for the other alignments)
+  // A rotation of the whole estimate about its first camera centre: with both trajectories
+  // relative to their first pose (p_i = positions, whatever the alignment), the rotation Q
+  // minimising sum |g_i - Q e_i|^2 (orthogonal Procrustes about the origin, Kabsch: SVD of
+  // sum g_i e_i^T). It is the error a global attitude offset makes (the start's attitude drifted
+  // before the trajectory's shape was fixed, a tilted plane of a loop), which relative
+  // constraints such as loop closures cannot see; what remains after it is the shape's error.
+  double start_rotation_deg = 0;             // angle of Q
+  Eigen::Vector3d start_rotation_axis = Eigen::Vector3d::UnitZ();  // unit, first camera frame
+  double ate_after_start_rotation_m = 0;     // RMS |g_i - Q e_i|
+  double final_pos_err_after_start_rotation_m = 0;
 };
 
 struct TrajectoryEvalParams {

@@ -135,6 +135,48 @@ TEST(TrajectoryMetrics, YawRateErrorGivesRotationDrift) {
   EXPECT_GT(m->final_pos_err_m, 1.0);
 }
 
+TEST(TrajectoryMetrics, RotationAboutTheStartIsSeparatedFromTheShapeError) {
+  // A loop-like path; the estimate, in another world frame, turns by Q0^T about its first camera
+  // centre right after the first frame (an early attitude error every later pose inherits), then
+  // a known shape error at the last frame.
+  std::vector<Eigen::Isometry3d> gt;
+  for (int i = 0; i < 120; ++i) {
+    const double a = 2 * M_PI * i / 120.0;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(40 * std::sin(a), 40 * (1 - std::cos(a)), 0.3 * std::sin(3 * a));
+    gt.push_back(T);
+  }
+  Eigen::Isometry3d world = Eigen::Isometry3d::Identity();  // the estimate's own world frame
+  world.linear() = Eigen::AngleAxisd(1.1, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  world.translation() = Eigen::Vector3d(3, 1, -7);
+  const Eigen::Matrix3d Q0 =
+      Eigen::AngleAxisd(0.002, Eigen::Vector3d(0.6, 0.8, 0).normalized()).toRotationMatrix();
+  Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();  // about the first camera centre
+  turn.linear() = Q0.transpose();
+  ASSERT_TRUE(gt[0].isApprox(Eigen::Isometry3d::Identity()));
+  std::vector<Eigen::Isometry3d> est;
+  for (std::size_t i = 0; i < gt.size(); ++i) est.push_back(i == 0 ? world : world * turn * gt[i]);
+  TrajectoryEvalParams p;
+  p.segment_lengths_m = {50};
+  p.align = TrajectoryAlignment::kNone;
+  auto m = evaluateTrajectory(gt, est, p);
+  ASSERT_TRUE(m.isOk());
+  EXPECT_GT(m->ate_rmse_m, 0.05);  // the turn alone moves the far side by 80 m * 2 mrad
+  EXPECT_NEAR(m->start_rotation_deg, 0.002 * 180 / M_PI, 1e-9);
+  // Axis in the first camera frame: gt[0] is the identity here.
+  EXPECT_NEAR(std::abs(m->start_rotation_axis.dot(Eigen::Vector3d(0.6, 0.8, 0))), 1.0, 1e-6);
+  EXPECT_LT(m->ate_after_start_rotation_m, 1e-9);
+  EXPECT_LT(m->final_pos_err_after_start_rotation_m, 1e-9);
+
+  // A shape error (the last position 5 cm off) stays after the rotation is removed.
+  est.back().translation() += world.linear() * Eigen::Vector3d(0, 0, 0.05);
+  m = evaluateTrajectory(gt, est, p);
+  ASSERT_TRUE(m.isOk());
+  EXPECT_NEAR(m->final_pos_err_after_start_rotation_m, 0.05, 2e-3);
+  EXPECT_NEAR(m->start_rotation_deg, 0.002 * 180 / M_PI, 2e-3);
+}
+
 TEST(TrajectoryMetrics, RejectsBadInput) {
   auto gt = path(10);
   TrajectoryEvalParams p;
