@@ -43,6 +43,20 @@ QuadMax fitQuadratic3x3(const float s[9]) {
   return q;
 }
 
+// Bilinear interpolation of score(x, y) (integer pixels of a w x h layer) at (x, y), clamped to
+// the layer. With non-negative weights and rounding monotone, a score bound in place of the
+// score gives a bound of the interpolated score, operation by operation.
+template <class Score>
+float bilinearScore(int w, int h, double x, double y, Score score) {
+  x = std::clamp(x, 0.0, w - 1.0);
+  y = std::clamp(y, 0.0, h - 1.0);
+  const int x0 = std::min(static_cast<int>(x), w - 2), y0 = std::min(static_cast<int>(y), h - 2);
+  const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+  const float top = (1 - fx) * score(x0, y0) + fx * score(x0 + 1, y0);
+  const float bottom = (1 - fx) * score(x0, y0 + 1) + fx * score(x0 + 1, y0 + 1);
+  return (1 - fy) * top + fy * bottom;
+}
+
 }  // namespace
 
 int OrbExtractor::lazyScore(int k, int x, int y) {
@@ -76,14 +90,8 @@ int OrbExtractor::scoreBound(int k, int x, int y) {
 // Bilinear interpolation of layer j's scores at (x, y) in layer-j px (clamped to the layer).
 float OrbExtractor::sampleScore(int j, double x, double y) {
   const Layer& l = layers_[static_cast<std::size_t>(j)];
-  const int w = l.image.width(), h = l.image.height();
-  x = std::clamp(x, 0.0, w - 1.0);
-  y = std::clamp(y, 0.0, h - 1.0);
-  const int x0 = std::min(static_cast<int>(x), w - 2), y0 = std::min(static_cast<int>(y), h - 2);
-  const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
-  const float top = (1 - fx) * lazyScore(j, x0, y0) + fx * lazyScore(j, x0 + 1, y0);
-  const float bottom = (1 - fx) * lazyScore(j, x0, y0 + 1) + fx * lazyScore(j, x0 + 1, y0 + 1);
-  return (1 - fy) * top + fy * bottom;
+  return bilinearScore(l.image.width(), l.image.height(), x, y,
+                       [&](int u, int v) { return lazyScore(j, u, v); });
 }
 
 // Scores of layer j (k - 1, k, k + 1; -1 = FAST 5-8 on c_0) at the 3x3 grid of layer-k pixels
@@ -110,18 +118,12 @@ bool OrbExtractor::suppresses(const Candidate& c, int j, int gx, int gy, bool or
   }
   const Layer& l = layers_[static_cast<std::size_t>(j)];
   const double ratio = layerScale(c.layer) / layerScale(j);
-  const int w = l.image.width(), h = l.image.height();
-  const double x = std::clamp((gx + 0.5) * ratio - 0.5, 0.0, w - 1.0);
-  const double y = std::clamp((gy + 0.5) * ratio - 0.5, 0.0, h - 1.0);
-  // sampleScore's interpolation with bounds in place of scores: >= its value, operation by
-  // operation (non-negative weights, rounding is monotone).
-  const int x0 = std::min(static_cast<int>(x), w - 2), y0 = std::min(static_cast<int>(y), h - 2);
-  const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
-  const float top = (1 - fx) * scoreBound(j, x0, y0) + fx * scoreBound(j, x0 + 1, y0);
-  const float bottom = (1 - fx) * scoreBound(j, x0, y0 + 1) + fx * scoreBound(j, x0 + 1, y0 + 1);
-  const float bound = (1 - fy) * top + fy * bottom;
+  const double x = (gx + 0.5) * ratio - 0.5, y = (gy + 0.5) * ratio - 0.5;
+  // sampleScore's interpolation with bounds in place of scores: >= its value.
+  const float bound = bilinearScore(l.image.width(), l.image.height(), x, y,
+                                    [&](int u, int v) { return scoreBound(j, u, v); });
   if (bound < s || (!or_equal && bound == s)) return false;
-  const float q = sampleScore(j, (gx + 0.5) * ratio - 0.5, (gy + 0.5) * ratio - 0.5);
+  const float q = sampleScore(j, x, y);
   return q > s || (or_equal && q == s);
 }
 
