@@ -4,16 +4,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/so3.hpp"
+
 namespace svslam {
-namespace {
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d S;
-  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return S;
-}
-
-}  // namespace
 
 Status DisparityOffsetParams::validate() const {
   if (!(prior_sigma_px > 0) || !std::isfinite(prior_sigma_px))
@@ -67,7 +60,7 @@ Status DisparityOffsetEstimator::process(const std::vector<PointPair>& pairs,
     const Eigen::Matrix3d W = (p.cov_cur + R * p.cov_prev * R.transpose()).inverse();
     if (!W.allFinite()) continue;
     Eigen::Matrix<double, 3, 6> J;
-    J << skew(RX), -Eigen::Matrix3d::Identity();
+    J << hatSO3(RX), -Eigen::Matrix3d::Identity();
     // j at the point both frames agree on (their mean, in each frame), not at the measured
     // points: measured depths enter r too, and j r would then carry a bias of about
     // -4 z sigma_z^2 / (f b) per point (errors in variables) that pushes delta up.

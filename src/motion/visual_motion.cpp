@@ -6,14 +6,10 @@
 #include <cmath>
 #include <random>
 
+#include "core/so3.hpp"
+
 namespace svslam {
 namespace {
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d S;
-  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return S;
-}
 
 // Weighted Umeyama (no scale) on the pairs in `idx`.
 Eigen::Isometry3d weightedUmeyama(const std::vector<PointPair>& pairs, const std::vector<int>& idx,
@@ -45,7 +41,7 @@ Eigen::Isometry3d weightedUmeyama(const std::vector<PointPair>& pairs, const std
 
 Eigen::Matrix3d expSO3(const Eigen::Vector3d& w) {
   const double a = w.norm();
-  if (a < 1e-12) return Eigen::Matrix3d::Identity() + skew(w);
+  if (a < 1e-12) return Eigen::Matrix3d::Identity() + hatSO3(w);
   return Eigen::AngleAxisd(a, w / a).toRotationMatrix();
 }
 
@@ -147,7 +143,7 @@ Status VisualMotion::process(const std::vector<PointPair>& pairs, VisualMotionRe
         const Eigen::Matrix3d W =
             (p.cov_cur + T.linear() * p.cov_prev * T.linear().transpose()).inverse();
         Eigen::Matrix<double, 3, 6> J;
-        J << skew(RX), -Eigen::Matrix3d::Identity();
+        J << hatSO3(RX), -Eigen::Matrix3d::Identity();
         const Eigen::Vector3d r = p.p_cur - RX - T.translation();
         H += J.transpose() * W * J;
         g += J.transpose() * W * r;
@@ -191,7 +187,7 @@ Status VisualMotion::process(const std::vector<PointPair>& pairs, VisualMotionRe
     const Eigen::Matrix3d C = p.cov_cur + T.linear() * p.cov_prev * T.linear().transpose();
     const Eigen::Matrix3d W = C.inverse();
     Eigen::Matrix<double, 3, 6> J;
-    J << skew(RX), -Eigen::Matrix3d::Identity();
+    J << hatSO3(RX), -Eigen::Matrix3d::Identity();
     Hs += J.transpose() * W * J;
     B += J.transpose() * W * C * W * J;
     sum_m2 += mahalanobis2(i, T);

@@ -4,12 +4,6 @@
 
 namespace svslam {
 
-Eigen::Matrix3d hatSO3(const Eigen::Vector3d& w) {
-  Eigen::Matrix3d S;
-  S << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
-  return S;
-}
-
 Eigen::Isometry3d boxPlus(const Eigen::Isometry3d& T_hat, const Vector6d& d) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = expSO3(d.head<3>()) * T_hat.linear();

@@ -27,14 +27,14 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "core/so3.hpp"  // hatSO3
+
 namespace svslam {
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 using Matrix36d = Eigen::Matrix<double, 3, 6>;
 
-// Skew-symmetric matrix [w]x.
-Eigen::Matrix3d hatSO3(const Eigen::Vector3d& w);
 
 // T = boxPlus(T_hat, d) = [exp([d.head<3>()]x) R_hat | t_hat + d.tail<3>()].
 Eigen::Isometry3d boxPlus(const Eigen::Isometry3d& T_hat, const Vector6d& d);
