@@ -3,6 +3,10 @@
 OpenCV references, to tell a bias of the data (calibration, ground truth) from one of svslam.
 
   python3 scripts/reference_vo_kitti.py KITTI_DIR [svslam trajectory_kitti.txt ...]
+  python3 scripts/reference_vo_kitti.py --regions KITTI_DIR
+
+--regions: the KLT reference on subsets of its points instead (left / right of the principal
+point, above / below it, nearer / farther than 15 m): which part of the scene carries a bias.
 
 For every frame k the relative rotation R_{k-1,k} (camera k in camera k-1) of each method is
 compared with the ground truth's: e_k = log(R_gt R_est^T), in the camera frame (x right, y down,
@@ -40,7 +44,11 @@ def log_so3(r):
 
 
 def main():
-    d = sys.argv[1]
+    args = sys.argv[1:]
+    regions = bool(args) and args[0] == "--regions"
+    if regions:
+        args = args[1:]
+    d = args[0]
     proj = [np.array([float(x) for x in l.split()[-12:]]).reshape(3, 4)
             for l in open(d + "/calib.txt") if l.strip()][:2]
     f, cx, cy = proj[0][0, 0], proj[0][0, 2], proj[0][1, 2]
@@ -79,7 +87,13 @@ def main():
         disp = p[:, 0] - np.array([kc[m.trainIdx].pt[0] for m in keep], np.float32)
         return xyz(p, disp), np.array([da[m.queryIdx] for m in keep]), p
 
+    subsets = {
+        "klt, left half": lambda p, z: p[:, 0] < cx, "klt, right half": lambda p, z: p[:, 0] >= cx,
+        "klt, above cy": lambda p, z: p[:, 1] < cy, "klt, below cy": lambda p, z: p[:, 1] >= cy,
+        "klt, nearer than 15 m": lambda p, z: z < 15, "klt, 15 m or farther": lambda p, z: z >= 15,
+    } if regions else {}
     results = {"orb": [], "klt": []}
+    results.update({name: [] for name in subsets})
     prev = orb_frame(0)
     for k in range(1, len(left)):
         cur = orb_frame(k)
@@ -96,9 +110,13 @@ def main():
         p, q, t = pts[:, 0], pr[:, 0], pn[:, 0]
         disp = p[:, 0] - q[:, 0]
         ok = (s1[:, 0] == 1) & (s2[:, 0] == 1) & (np.abs(p[:, 1] - q[:, 1]) < 1) & (disp > 2)
-        results["klt"].append(error(pnp(xyz(p[ok], disp[ok]), t[ok].astype(np.float32)), k))
+        obj, img = xyz(p[ok], disp[ok]), t[ok].astype(np.float32)
+        results["klt"].append(error(pnp(obj, img), k))
+        for name, inside in subsets.items():
+            m = inside(p[ok], obj[:, 2])
+            results[name].append(error(pnp(obj[m], img[m]), k))
 
-    for path in sys.argv[2:]:
+    for path in args[1:]:
         est = load_kitti_poses(path)
         results[path] = [error((np.linalg.inv(est[k - 1]) @ est[k])[:3, :3], k)
                          for k in range(1, len(est))]
