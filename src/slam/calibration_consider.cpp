@@ -3,7 +3,7 @@
 #include <cmath>
 #include <string>
 
-#include "slam/pose_jacobians.hpp"
+#include "core/so3.hpp"
 
 namespace svslam {
 

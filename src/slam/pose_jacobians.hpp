@@ -35,7 +35,6 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 using Matrix36d = Eigen::Matrix<double, 3, 6>;
 
-
 // T = boxPlus(T_hat, d) = [exp([d.head<3>()]x) R_hat | t_hat + d.tail<3>()].
 Eigen::Isometry3d boxPlus(const Eigen::Isometry3d& T_hat, const Vector6d& d);
 // The inverse: d = [log(R R_hat^T), t - t_hat] so that boxPlus(T_hat, d) == T.
