@@ -97,6 +97,11 @@ ConfigSection slamConfigSection() {
       number("calibration_sigma_scale", SVSLAM_FIELD(slam.calibration_uncertainty.sigma_scale), 0,
              0.5, "", "relative standard deviation of the stereo depth scale (baseline, focal "
              "length): scales the path; added to the published pose covariance"),
+      number("drift_sigma_rotation_rad_per_m",
+             SVSLAM_FIELD(slam.drift_uncertainty.sigma_rotation_rad_per_m), 0, 0.1, "rad/m",
+             "standard deviation of the odometry's rotational drift per metre travelled, about "
+             "each camera axis (0 = none): grows the published attitude and position "
+             "covariance with the path (not for rendered sources)"),
       flag("right_camera_check", SVSLAM_FIELD(slam.right_camera.enabled),
            "watch the right image (missing, flat, frozen) and fly on the left one alone while "
            "it is unusable (bearing-only SLAM)"),

@@ -45,7 +45,7 @@ Status RunPublisher::publish(const rt::FrameSlot& slot) {
     char num[32];
     for (int i = 0; i < 36; ++i) {
       std::snprintf(num, sizeof num, "%s%.9e", i ? " " : "",
-                    sr.pose_cov(i / 6, i % 6) + sr.pose_cov_calibration(i / 6, i % 6));
+                    sr.pose_cov(i / 6, i % 6) + sr.pose_cov_consider(i / 6, i % 6));
       cov_line_ += num;
     }
     if (Status s = cov_file_.append(cov_line_); !s) return s;
@@ -71,7 +71,7 @@ Status RunPublisher::publish(const rt::FrameSlot& slot) {
   p.seq = slot.seq;
   p.T_world_cam = sr.T_world_cam;
   // pose_t's convention: the right-multiplied error in the camera frame (lcm/pose_t.lcm).
-  p.cov = cameraFrameCovariance(sr.T_world_cam, sr.pose_cov + sr.pose_cov_calibration);
+  p.cov = cameraFrameCovariance(sr.T_world_cam, sr.pose_cov + sr.pose_cov_consider);
   p.status = sr.initializing          ? drivers::TrackingStatus::kInitializing
              : sr.mono                ? drivers::TrackingStatus::kMonocular
              : sr.odometry.frame == 0 ? drivers::TrackingStatus::kInitializing

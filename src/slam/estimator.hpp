@@ -33,10 +33,12 @@ struct SlamFrameResult {
   // Covariance published with the pose, [rot rad, trans m]: the filter's pose covariance
   // (ekf); the last frame-to-frame motion's (vo, which has no pose covariance).
   Eigen::Matrix<double, 6, 6> pose_cov = Eigen::Matrix<double, 6, 6>::Zero();
-  // What the calibration's uncertainty adds to the pose covariance (ekf, mono; zero for vo and
-  // exact calibrations): slam/calibration_consider.hpp. Published (LCM, pose_covariance.txt)
-  // as pose_cov + pose_cov_calibration; the filter, the map and loop closing use pose_cov.
-  Eigen::Matrix<double, 6, 6> pose_cov_calibration = Eigen::Matrix<double, 6, 6>::Zero();
+  // What the errors the filter does not estimate add to the pose covariance ("consider"
+  // parameters: the calibration's uncertainty, slam/calibration_consider.hpp, and the
+  // odometry's rotational drift, slam/drift_consider.hpp; ekf, mono; zero for vo and exact
+  // calibrations). Published (LCM, pose_covariance.txt) as pose_cov + pose_cov_consider; the
+  // filter, the map and loop closing use pose_cov.
+  Eigen::Matrix<double, 6, 6> pose_cov_consider = Eigen::Matrix<double, 6, 6>::Zero();
   int landmarks_in_state = 0;
   int landmarks_in_map = 0;   // in the state + retired
   int observed = 0;           // landmarks observed (tracked from the previous frame)

@@ -3,6 +3,7 @@
 #include "core/status.hpp"
 #include "slam/bearing_initializer.hpp"
 #include "slam/calibration_consider.hpp"
+#include "slam/drift_consider.hpp"
 #include "slam/ekf_slam.hpp"
 #include "slam/relocaliser.hpp"
 #include "slam/right_camera_monitor.hpp"
@@ -100,9 +101,14 @@ struct SlamSystemParams {
   // kept while tracking is good, a lost frame's pose found against them. Stereo ekf mode.
   RelocaliserParams relocalisation;
   // Uncertainty of the rig's calibration, carried into the published pose covariance
-  // (slam/calibration_consider.hpp; SlamFrameResult::pose_cov_calibration). A calibration
+  // (slam/calibration_consider.hpp; SlamFrameResult::pose_cov_consider). A calibration
   // marked exact (StereoCalibration::exact: rendered sources) adds nothing whatever these say.
   CalibrationConsiderParams calibration_uncertainty{1.0, 0.002};
+  // The odometry's rotational drift per metre travelled, carried into the published pose
+  // covariance beside the calibration's (slam/drift_consider.hpp). The default is svslam's
+  // drift on kitti_odometry_seq_a (devkit r_err 0.025 deg/m = sqrt(3) x 0.25 mrad/m;
+  // docs/slam.md "Drift in the published covariance"). Nothing for exact calibrations.
+  DriftConsiderParams drift_uncertainty{0.25e-3};
   Status validate() const;
 };
 

@@ -90,6 +90,7 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
       calib_(calib),
       calib_consider_(calib.exact ? CalibrationConsiderParams{} : params.calibration_uncertainty,
                       calib.f_px),
+      drift_consider_(calib.exact ? DriftConsiderParams{} : params.drift_uncertainty),
       vo_(odometry, calib),
       ekf_(params.ekf),
       landmarks_(params.patch_half_px, params.map_reserve, params.map_voxel_m),
@@ -102,6 +103,7 @@ SlamSystem::SlamSystem(const SlamSystemParams& params, const StereoOdometryParam
   if (init_status_) init_status_ = vo_.initStatus();
   if (init_status_) init_status_ = ekf_.initStatus();
   if (init_status_) init_status_ = calib_consider_.initStatus();
+  if (init_status_) init_status_ = drift_consider_.initStatus();
   if (init_status_) init_status_ = landmark_row_matcher_.initStatus();
   if (init_status_) init_status_ = bearing_init_.initStatus();
   if (init_status_) init_status_ = two_view_.initStatus();
@@ -184,8 +186,14 @@ Status SlamSystem::process(ImageView<const std::uint8_t> left, ImageView<const s
                            Executor& executor, StageObserver* observer) {
   if (Status s = processFrame(left, right, stereo, out, executor, observer); !s) return s;
   if (out.initializing) return Status::ok();  // no pose yet: the covariance is uninformative
-  // The world origin (the first pose, exact) is where the calibration's error starts.
-  return calib_consider_.process(anchor_pose_, out.T_world_cam, out.pose_cov_calibration);
+  // The world origin (the first pose, exact) is where the calibration's error and the drift
+  // start.
+  if (Status s = calib_consider_.process(anchor_pose_, out.T_world_cam, out.pose_cov_consider); !s)
+    return s;
+  Matrix6d drift_cov;
+  if (Status s = drift_consider_.process(anchor_pose_, out.T_world_cam, drift_cov); !s) return s;
+  out.pose_cov_consider += drift_cov;
+  return Status::ok();
 }
 
 Status SlamSystem::processFrame(ImageView<const std::uint8_t> left,

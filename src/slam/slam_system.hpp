@@ -251,6 +251,7 @@ class SlamSystem final : public Estimator {
   SlamSystemParams params_;
   StereoCalibration calib_;
   CalibrationConsider calib_consider_;
+  DriftConsider drift_consider_;
   Status init_status_;
   StereoOdometry vo_;
   EkfSlam ekf_;

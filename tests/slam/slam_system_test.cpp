@@ -59,7 +59,7 @@ RunOut runSlam(const std::string& spec, const SlamSystemParams& sp, int max_fram
     r.est.push_back(out.T_world_cam);
     r.vo.push_back(out.odometry.T_first_cam);
     r.cov.push_back(out.pose_cov);
-    r.cov_calibration.push_back(out.pose_cov_calibration);
+    r.cov_calibration.push_back(out.pose_cov_consider);
     r.t_ns.push_back(f.t_ns);
     r.max_in_state = std::max(r.max_in_state, out.landmarks_in_state);
     r.reperceived += out.reperceived;
