@@ -26,7 +26,7 @@ namespace {
 struct RunOut {
   std::vector<Eigen::Isometry3d> est, vo, gt;
   std::vector<Matrix6d> cov;
-  std::vector<Matrix6d> cov_calibration;
+  std::vector<Matrix6d> cov_consider;
   std::vector<TimeNs> t_ns;
   int max_in_state = 0;
   int reperceived = 0;
@@ -59,7 +59,7 @@ RunOut runSlam(const std::string& spec, const SlamSystemParams& sp, int max_fram
     r.est.push_back(out.T_world_cam);
     r.vo.push_back(out.odometry.T_first_cam);
     r.cov.push_back(out.pose_cov);
-    r.cov_calibration.push_back(out.pose_cov_consider);
+    r.cov_consider.push_back(out.pose_cov_consider);
     r.t_ns.push_back(f.t_ns);
     r.max_in_state = std::max(r.max_in_state, out.landmarks_in_state);
     r.reperceived += out.reperceived;
@@ -219,10 +219,11 @@ TEST(SlamSystem, SameInputSameOutput) {
 // The calibration's uncertainty (slam/calibration_consider.hpp) is published beside the filter's
 // covariance, from the world origin (the first pose), and never enters the filter: the same
 // poses and filter covariances with and without it; none for a rendered (exact) calibration.
-TEST(SlamSystem, CalibrationUncertaintyIsPublishedBesideTheFilter) {
+TEST(SlamSystem, ConsiderUncertaintyIsPublishedBesideTheFilter) {
   SlamSystemParams p;
   p.calibration_uncertainty.sigma_principal_point_px = 1.5;
   p.calibration_uncertainty.sigma_scale = 0.004;
+  p.drift_uncertainty.sigma_rotation_rad_per_m = 0.5e-3;
   const std::string spec = "synthetic:width=320,height=240,frames=12";
   const RunOut exact = runSlam(spec, p);
   const RunOut inexact = runSlam(spec, p, 0, /*inexact=*/true);
@@ -230,21 +231,27 @@ TEST(SlamSystem, CalibrationUncertaintyIsPublishedBesideTheFilter) {
   ASSERT_EQ(inexact.est.size(), 12u);
   auto src = drivers::openStereoSource(spec);
   ASSERT_TRUE(src.isOk());
+  // The calibration's and the drift's covariances (slam/*_consider.hpp) along the trajectory.
   const CalibrationConsider model(p.calibration_uncertainty, (*src)->calibration().f_px);
+  DriftConsider drift(p.drift_uncertainty);
   for (std::size_t i = 0; i < exact.est.size(); ++i) {
     EXPECT_TRUE(exact.est[i].matrix() == inexact.est[i].matrix()) << "frame " << i;
     EXPECT_TRUE(exact.cov[i] == inexact.cov[i]) << "frame " << i;
-    EXPECT_EQ(exact.cov_calibration[i].cwiseAbs().maxCoeff(), 0.0) << "frame " << i;
-    Matrix6d expected;
+    EXPECT_EQ(exact.cov_consider[i].cwiseAbs().maxCoeff(), 0.0) << "frame " << i;
+    Matrix6d expected, expected_drift;
     ASSERT_TRUE(model.process(Eigen::Isometry3d::Identity(), inexact.est[i], expected));
-    EXPECT_LT((inexact.cov_calibration[i] - expected).cwiseAbs().maxCoeff(), 1e-15);
+    ASSERT_TRUE(drift.process(Eigen::Isometry3d::Identity(), inexact.est[i], expected_drift));
+    if (i + 1 == exact.est.size()) {
+      EXPECT_GT(expected_drift.trace(), 0.0);
+    }
+    EXPECT_LT((inexact.cov_consider[i] - expected - expected_drift).cwiseAbs().maxCoeff(), 1e-15);
   }
   // It grows with the path: at the last frame the scale's part alone is (0.004 d)^2.
   const double d = inexact.est.back().translation().norm();
   ASSERT_GT(d, 5.0);
-  const Eigen::Matrix3d position = inexact.cov_calibration.back().bottomRightCorner<3, 3>();
+  const Eigen::Matrix3d position = inexact.cov_consider.back().bottomRightCorner<3, 3>();
   EXPECT_GE(position.trace(), 0.004 * 0.004 * d * d * (1 - 1e-9));
-  EXPECT_EQ(inexact.cov_calibration.front().cwiseAbs().maxCoeff(), 0.0);  // the origin
+  EXPECT_EQ(inexact.cov_consider.front().cwiseAbs().maxCoeff(), 0.0);  // the origin
 }
 
 TEST(SlamSystem, KittiNoWorseThanOdometry) {
