@@ -44,5 +44,5 @@ for cfg in default real cam0; do
     [ -f "$out/euroc_$cfg/trajectory_tum.txt" ] || continue
   fi
   score "euroc_mh01_first320 cam0, $cfg" "$data/groundtruth_per_frame_cam0_times.txt" \
-    "$out/euroc_$cfg" --body-to-cam "$data/mav0/cam0/sensor.yaml"
+    "$out/euroc_$cfg" --euroc "$data"
 done

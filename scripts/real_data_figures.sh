@@ -62,7 +62,7 @@ run_case() {
     printf '%-16s drift %6.3f %%  ' "$label" "$(echo "$ev" | field t_err_pct)"
   else
     ev=$("$bin" eval-trajectory --gt "$euroc/groundtruth_per_frame_cam0_times.txt" \
-      --est "$out/trajectory_tum.txt" --body-to-cam "$euroc/mav0/cam0/sensor.yaml" \
+      --est "$out/trajectory_tum.txt" --euroc "$euroc" \
       --cov "$out/pose_covariance.txt")
     printf '%-16s ATE %.4f m     ' "$label" "$(echo "$ev" | field ate_rmse_m)"
   fi

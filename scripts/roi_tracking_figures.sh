@@ -48,7 +48,7 @@ for mode in ekf vo; do
     if [ -d "$data/euroc_mh01_first320" ]; then
       e=$data/euroc_mh01_first320
       score euroc_mh01_320 "euroc:$e" $mode $setting --gt "$e/groundtruth_per_frame_cam0_times.txt" \
-        --body-to-cam "$e/mav0/cam0/sensor.yaml" --segments 1,2,4 --step 1
+        --euroc "$e" --segments 1,2,4 --step 1
     fi
     for seed in 1 2 3; do
       score "synthetic_seed$seed" "synthetic:width=512,height=384,seed=$seed" $mode $setting \

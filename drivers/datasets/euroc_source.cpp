@@ -28,17 +28,13 @@ struct EurocCamera {
   std::vector<std::string> files;
 };
 
-Result<EurocCamera> readCamera(const fs::path& cam_dir) {
+// The camera model and extrinsic of cam_dir/sensor.yaml (no image list).
+Result<EurocCamera> readCameraModel(const fs::path& cam_dir) {
   const std::string yaml = (cam_dir / "sensor.yaml").string();
   auto yaml_text = readTextFile(yaml);
   if (!yaml_text) return yaml_text.status();
   auto sensor = parseEurocSensor(*yaml_text, yaml);
   if (!sensor) return sensor.status();
-  const std::string csv = (cam_dir / "data.csv").string();
-  auto csv_text = readTextFile(csv);
-  if (!csv_text) return csv_text.status();
-  auto list = parseEurocDataCsv(*csv_text, csv);
-  if (!list) return list.status();
   const auto& k = sensor->intrinsics;
   const auto& d = sensor->distortion;
   EurocCamera c;
@@ -46,9 +42,40 @@ Result<EurocCamera> readCamera(const fs::path& cam_dir) {
   c.D = (cv::Mat_<double>(1, 4) << d[0], d[1], d[2], d[3]);
   c.size = cv::Size(sensor->width, sensor->height);
   c.T_BS = sensor->T_BS;
+  return c;
+}
+
+Result<EurocCamera> readCamera(const fs::path& cam_dir) {
+  auto model = readCameraModel(cam_dir);
+  if (!model) return model.status();
+  EurocCamera c = std::move(model).value();
+  const std::string csv = (cam_dir / "data.csv").string();
+  auto csv_text = readTextFile(csv);
+  if (!csv_text) return csv_text.status();
+  auto list = parseEurocDataCsv(*csv_text, csv);
+  if (!list) return list.status();
   c.t_ns = std::move(list->t_ns);
   for (const std::string& name : list->names) c.files.push_back((cam_dir / "data" / name).string());
   return c;
+}
+
+struct Rectification {
+  cv::Mat R0, R1, P0, P1;  // cv::stereoRectify's (p_rect0 = R0 p_cam0), zero disparity, alpha 0
+};
+
+Rectification rectify(const EurocCamera& c0, const EurocCamera& c1) {
+  // p_cam1 = R p_cam0 + T with T_cam1_cam0 = T_BS1^-1 T_BS0.
+  const Eigen::Isometry3d T10 = c1.T_BS.inverse() * c0.T_BS;
+  cv::Mat R(3, 3, CV_64F), T(3, 1, CV_64F);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) R.at<double>(r, c) = T10.linear()(r, c);
+    T.at<double>(r, 0) = T10.translation()(r);
+  }
+  Rectification out;
+  cv::Mat Q;
+  cv::stereoRectify(c0.K, c0.D, c1.K, c1.D, c0.size, R, T, out.R0, out.R1, out.P0, out.P1, Q,
+                    cv::CALIB_ZERO_DISPARITY, 0.0);
+  return out;
 }
 
 class EurocSource final : public StereoSource {
@@ -158,16 +185,8 @@ Result<std::unique_ptr<StereoSource>> openEurocSource(const std::string& dir) {
     return Status::corruptData("EuRoC cam0 and cam1 list different timestamps in " + dir);
   if (c0->size != c1->size)
     return Status::corruptData("EuRoC cam0 and cam1 resolutions differ in " + dir);
-  // p_cam1 = R p_cam0 + T with T_cam1_cam0 = T_BS1^-1 T_BS0.
-  const Eigen::Isometry3d T10 = c1->T_BS.inverse() * c0->T_BS;
-  cv::Mat R(3, 3, CV_64F), T(3, 1, CV_64F);
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) R.at<double>(r, c) = T10.linear()(r, c);
-    T.at<double>(r, 0) = T10.translation()(r);
-  }
-  cv::Mat R0, R1, P0, P1, Q;
-  cv::stereoRectify(c0->K, c0->D, c1->K, c1->D, c0->size, R, T, R0, R1, P0, P1, Q,
-                    cv::CALIB_ZERO_DISPARITY, 0.0);
+  const Rectification rect = rectify(*c0, *c1);
+  const cv::Mat &R0 = rect.R0, &R1 = rect.R1, &P0 = rect.P0, &P1 = rect.P1;
   cv::Mat m0x, m0y, m1x, m1y;
   cv::initUndistortRectifyMap(c0->K, c0->D, R0, P0, c0->size, CV_16SC2, m0x, m0y);
   cv::initUndistortRectifyMap(c1->K, c1->D, R1, P1, c1->size, CV_16SC2, m1x, m1y);
@@ -182,6 +201,23 @@ Result<std::unique_ptr<StereoSource>> openEurocSource(const std::string& dir) {
     return Status(s.code(), "EuRoC rectification of " + dir + ": " + s.message());
   return std::unique_ptr<StereoSource>(std::make_unique<EurocSource>(
       std::move(c0).value(), std::move(c1).value(), calib, m0x, m0y, m1x, m1y));
+}
+
+Result<Eigen::Isometry3d> eurocBodyToRectifiedLeft(const std::string& dir) {
+  const fs::path mav = fs::path(dir) / "mav0";
+  auto c0 = readCameraModel(mav / "cam0");
+  if (!c0) return c0.status();
+  auto c1 = readCameraModel(mav / "cam1");
+  if (!c1) return c1.status();
+  if (c0->size != c1->size)
+    return Status::corruptData("EuRoC cam0 and cam1 resolutions differ in " + dir);
+  const Rectification rect = rectify(*c0, *c1);
+  Eigen::Isometry3d T_cam0_rect = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) T_cam0_rect.linear()(r, c) = rect.R0.at<double>(c, r);  // R0^T
+  if (!T_cam0_rect.matrix().allFinite())
+    return Status::corruptData("EuRoC rectification of " + dir + " is not finite");
+  return c0->T_BS * T_cam0_rect;
 }
 
 }  // namespace svslam::drivers

@@ -84,6 +84,12 @@ Status checkStereoCalibration(const StereoCalibration& c);
 
 Result<std::unique_ptr<StereoSource>> openKittiSource(const std::string& dir);
 Result<std::unique_ptr<StereoSource>> openEurocSource(const std::string& dir);
+// The rectified left camera that openEurocSource(dir) tracks, in the body (IMU) frame of the
+// EuRoC ground truth: T_B_rect = T_BS(cam0) * [R0^T | 0], R0 the rotation stereoRectify gives
+// cam0 (p_rect = R0 p_cam0; the centre does not move). svslam's poses are those of this
+// camera, so T_W_B * T_B_rect is the ground truth to score them against (EuRoC MH01: R0 turns
+// by 0.62 deg). Reads mav0/cam0 and mav0/cam1 sensor.yaml only.
+Result<Eigen::Isometry3d> eurocBodyToRectifiedLeft(const std::string& dir);
 
 // "synthetic[:key=value,...]" (keys in synthetic_flight.hpp).
 Result<std::unique_ptr<StereoSource>> openSyntheticSource(const std::string& options);

@@ -8,6 +8,7 @@
 
 #include "drivers/files/trajectory_io.hpp"
 #include "drivers/files/yaml_lists.hpp"
+#include "drivers/source/stereo_source.hpp"
 #include "eval/trajectory_metrics.hpp"
 #include "pipeline/cli/arg_parser.hpp"
 #include "pipeline/cli/commands.hpp"
@@ -51,7 +52,11 @@ int runEvalTrajectory(const std::vector<std::string>& args) {
               "per estimate line, [rot rad, trans m]): adds NEES and the share of frames whose "
               "errors are within 2 sigma");
   p.addOption("body-to-cam", "SENSOR_YAML",
-              "EuRoC cam0 sensor.yaml: ground truth T_W_B becomes T_W_B * T_BS");
+              "EuRoC cam0 sensor.yaml: ground truth T_W_B becomes T_W_B * T_BS (the raw cam0)");
+  p.addOption("euroc", "DIR",
+              "EuRoC folder (mav0/cam0, mav0/cam1): ground truth T_W_B becomes the rectified "
+              "left camera that `svslam run --source euroc:DIR` tracks, T_W_B * T_BS * "
+              "[R_rect^T | 0] (the score of svslam's EuRoC runs; not with --body-to-cam)");
   if (auto code = parseCommandLine(p, args)) return *code;
   auto fail = [](const Status& s) { return reportFailure("eval-trajectory", s); };
 
@@ -88,8 +93,11 @@ int runEvalTrajectory(const std::vector<std::string>& args) {
   if (!gt) return fail(gt.status());
   auto est = drivers::readTrajectory(p.get("est"));
   if (!est) return fail(est.status());
-  if (p.has("body-to-cam")) {
-    auto tbs = drivers::readEurocTbs(p.get("body-to-cam"));
+  if (p.has("body-to-cam") && p.has("euroc"))
+    return fail(Status::invalidArgument("--body-to-cam and --euroc both give the camera; use one"));
+  if (p.has("body-to-cam") || p.has("euroc")) {
+    auto tbs = p.has("euroc") ? drivers::eurocBodyToRectifiedLeft(p.get("euroc"))
+                              : drivers::readEurocTbs(p.get("body-to-cam"));
     if (!tbs) return fail(tbs.status());
     for (auto& T : gt->poses) T = T * *tbs;
   }

@@ -104,9 +104,9 @@ TEST(StereoOdometry, EurocAteWithinTarget) {
   const Track t = runOdometry("euroc:" + kEuroc, StereoOdometryParams{}, 0);
   auto gt = drivers::readTrajectory(gt_path);
   ASSERT_TRUE(gt.isOk());
-  auto tbs = drivers::readEurocTbs(kEuroc + "/mav0/cam0/sensor.yaml");
+  auto tbs = drivers::eurocBodyToRectifiedLeft(kEuroc);
   ASSERT_TRUE(tbs.isOk());
-  for (auto& T : gt->poses) T = T * *tbs;  // body -> cam0
+  for (auto& T : gt->poses) T = T * *tbs;  // body -> rectified cam0
   std::vector<Eigen::Isometry3d> g, e;
   ASSERT_TRUE(drivers::associateTrajectories(*gt, t.traj, 0.02, g, e).isOk());
   ASSERT_GE(g.size(), 300u);
@@ -137,9 +137,9 @@ TEST(StereoOdometry, EurocEveryFourthFrameIsTrackedThroughTheTurns) {
   if (!fs::exists(gt_path)) GTEST_SKIP() << "no EuRoC data at " << kEuroc;
   auto gt = drivers::readTrajectory(gt_path);
   ASSERT_TRUE(gt.isOk());
-  auto tbs = drivers::readEurocTbs(kEuroc + "/mav0/cam0/sensor.yaml");
+  auto tbs = drivers::eurocBodyToRectifiedLeft(kEuroc);
   ASSERT_TRUE(tbs.isOk());
-  for (auto& T : gt->poses) T = T * *tbs;  // body -> cam0
+  for (auto& T : gt->poses) T = T * *tbs;  // body -> rectified cam0
   auto ate = [&](const Track& t) {
     std::vector<Eigen::Isometry3d> g, e;
     EXPECT_TRUE(drivers::associateTrajectories(*gt, t.traj, 0.02, g, e).isOk());

@@ -219,6 +219,12 @@ TEST_F(Cli, EvalTrajectoryScoresAndRejectsBadInput) {
   expectError(
       "eval-trajectory --gt " + path("gt.txt") + " --est " + path("est.txt") + " --max-dt -1",
       "--max-dt: -1 is negative");
+  expectError("eval-trajectory --gt " + path("gt.txt") + " --est " + path("est.txt") +
+                  " --euroc " + path("no_euroc"),
+              "no_euroc/mav0/cam0/sensor.yaml");
+  expectError("eval-trajectory --gt " + path("gt.txt") + " --est " + path("est.txt") +
+                  " --euroc " + path("x") + " --body-to-cam " + path("y"),
+              "use one");
   {
     std::ofstream f(path("skew.txt"));  // line 2: a scaled, not orthonormal, 3x3 part
     for (int i = 0; i < 30; ++i)

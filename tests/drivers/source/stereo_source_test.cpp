@@ -98,6 +98,45 @@ TEST(StereoSource, EurocIsRectified) {
   EXPECT_GT(dy_raw, dy + 1.0);
 }
 
+// Writes DIR/mav0/camN/sensor.yaml for a distortion-free 640x480 camera with extrinsic T_BS.
+void writeEurocSensor(const fs::path& dir, int n, const Eigen::Isometry3d& T_BS) {
+  const fs::path cam = dir / "mav0" / ("cam" + std::to_string(n));
+  fs::create_directories(cam);
+  std::ofstream f(cam / "sensor.yaml");
+  f.precision(17);
+  f << "T_BS:\n  data: [";
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) f << (r || c ? ", " : "") << T_BS.matrix()(r, c);
+  f << "]\nresolution: [640, 480]\nintrinsics: [400, 400, 320, 240]\n"
+       "distortion_coefficients: [0, 0, 0, 0]\n";
+}
+
+// The rectified left camera in the body frame: cam0 itself for a rig already rectified; for a
+// baseline tilted in the image plane, cam0 turned about its optical centre so that its x axis
+// lies along the baseline (cv::stereoRectify's rectified frame).
+TEST(StereoSource, EurocRectifiedLeftCameraInTheBodyFrame) {
+  const fs::path dir = fs::temp_directory_path() / ("svslam_euroc_rect_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  Eigen::Isometry3d T_BS0 = Eigen::Isometry3d::Identity();
+  T_BS0.linear() = Eigen::AngleAxisd(1.2, Eigen::Vector3d(0.3, -0.5, 0.8).normalized()).matrix();
+  T_BS0.translation() = Eigen::Vector3d(-0.02, -0.06, 0.01);
+  writeEurocSensor(dir, 0, T_BS0);
+  writeEurocSensor(dir, 1, T_BS0 * Eigen::Translation3d(0.11, 0, 0));
+  auto T = eurocBodyToRectifiedLeft(dir.string());
+  ASSERT_TRUE(T) << T.status().message();
+  EXPECT_LT((T->matrix() - T_BS0.matrix()).cwiseAbs().maxCoeff(), 1e-9);
+  const Eigen::Vector3d baseline(0.11, 0.011, 0);  // cam1's centre in cam0, 5.7 deg off x
+  writeEurocSensor(dir, 1, T_BS0 * Eigen::Translation3d(baseline));
+  T = eurocBodyToRectifiedLeft(dir.string());
+  ASSERT_TRUE(T) << T.status().message();
+  EXPECT_LT((T->translation() - T_BS0.translation()).norm(), 1e-12);
+  const Eigen::Vector3d x_rect = T->linear().col(0), b_body = T_BS0.linear() * baseline.normalized();
+  EXPECT_LT(x_rect.cross(b_body).norm(), 1e-9) << x_rect.transpose() << " / " << b_body.transpose();
+  fs::remove_all(dir / "mav0" / "cam1");
+  EXPECT_EQ(eurocBodyToRectifiedLeft(dir.string()).status().code(), StatusCode::kNotFound);
+  fs::remove_all(dir);
+}
+
 TEST(StereoSource, BadFoldersGiveClearErrors) {
   EXPECT_EQ(openStereoSource("kitti:/nonexistent/seq").status().code(), StatusCode::kNotFound);
   EXPECT_EQ(openStereoSource("euroc:/nonexistent/seq").status().code(), StatusCode::kNotFound);
