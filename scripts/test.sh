@@ -32,10 +32,19 @@ export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 exclude=()
 if [ "${SANITIZE:-0}" = "1" ]; then
-  # Under the sanitizers, not the two bit-identity checks that fly the same mono flight twice
-  # (with the real and with a black right image: about 200 s each there); the release run above
-  # checks them, and the other mono tests take the same code through ASan + UBSan.
-  exclude=(-E "^(slam_mono_start_test\.MonoStart\.RightImageIsNeverUsed|slam_mono_mode_test\.MonoMode\.RightImageAfterTheFirstPairIsNotUsed)$")
+  # Under the sanitizers, not the slowest flights whose code other tests take through ASan +
+  # UBSan (100-200 s each there; the release run above checks every one of them): the two
+  # mono bit-identity checks that fly the same flight twice (MonoStart.FlightUpToScale... keeps
+  # the mono start, camera loss the bearing-only flight), the altimeter-scaled mono start, the
+  # left-camera-only mono flight, the frozen right camera (the black one stays) and the CLI's
+  # two-lap loop (ThreadSanitizer runs it below; loop_closer_test keeps the back end).
+  slow=(slam_mono_start_test.MonoStart.RightImageIsNeverUsed
+        slam_mono_start_test.MonoStartAltitude.MetricMapFromTheAltimeterWithoutAStereoPair
+        slam_mono_mode_test.MonoMode.RightImageAfterTheFirstPairIsNotUsed
+        slam_mono_mode_test.MonoMode.FlightFromTheLeftCameraWithinOnePercentAfterSim3
+        slam_camera_loss_test.CameraLoss.RightCameraFrozenFrom40To60ThenBack
+        pipeline_cli_loop_test.CliLoop.TwoLapsCloseLoopsAndWriteTheOptimisedTrajectory)
+  exclude=(-E "^($(IFS='|'; echo "${slow[*]//./\.}"))$")
 fi
 ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$(nproc)" "${exclude[@]}"
 if [ "${SANITIZE:-0}" != "1" ]; then
