@@ -11,27 +11,19 @@
 #include <cmath>
 #include <random>
 
+#include "consider_test_support.hpp"
+
 namespace svslam {
 namespace {
 
-using Eigen::AngleAxisd;
 using Eigen::Isometry3d;
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
 using Vector6 = Eigen::Matrix<double, 6, 1>;
 
-Isometry3d pose(const Vector3d& rotvec, const Vector3d& t) {
-  Isometry3d T = Isometry3d::Identity();
-  if (rotvec.norm() > 0) T.linear() = AngleAxisd(rotvec.norm(), rotvec.normalized()).matrix();
-  T.translation() = t;
-  return T;
-}
-
-Vector3d logRotation(const Matrix3d& R) {
-  const AngleAxisd aa(R);
-  return aa.angle() * aa.axis();
-}
+using consider_test::logRotation;
+using consider_test::pose;
 
 // theta of a principal-point error (dcx, dcy) px (the header's model).
 Vector3d thetaOf(double dcx, double dcy, double f) { return {-dcy / f, dcx / f, 0.0}; }

@@ -12,27 +12,19 @@
 #include <random>
 #include <vector>
 
+#include "consider_test_support.hpp"
+
 namespace svslam {
 namespace {
 
-using Eigen::AngleAxisd;
 using Eigen::Isometry3d;
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
 using Vector6 = Eigen::Matrix<double, 6, 1>;
 
-Isometry3d pose(const Vector3d& rotvec, const Vector3d& t) {
-  Isometry3d T = Isometry3d::Identity();
-  if (rotvec.norm() > 0) T.linear() = AngleAxisd(rotvec.norm(), rotvec.normalized()).matrix();
-  T.translation() = t;
-  return T;
-}
-
-Vector3d logRotation(const Matrix3d& R) {
-  const AngleAxisd aa(R);
-  return aa.angle() * aa.axis();
-}
+using consider_test::logRotation;
+using consider_test::pose;
 
 // A drive with turns and climbs: 40 steps of about 1.2 m, each turning by up to 3 degrees.
 std::vector<Isometry3d> drive() {
