@@ -63,7 +63,10 @@ struct Rectification {
   cv::Mat R0, R1, P0, P1;  // cv::stereoRectify's (p_rect0 = R0 p_cam0), zero disparity, alpha 0
 };
 
-Rectification rectify(const EurocCamera& c0, const EurocCamera& c1) {
+// The rectification of the pair of folder dir (named in the error when the sizes differ).
+Result<Rectification> rectify(const EurocCamera& c0, const EurocCamera& c1, const std::string& dir) {
+  if (c0.size != c1.size)
+    return Status::corruptData("EuRoC cam0 and cam1 resolutions differ in " + dir);
   // p_cam1 = R p_cam0 + T with T_cam1_cam0 = T_BS1^-1 T_BS0.
   const Eigen::Isometry3d T10 = c1.T_BS.inverse() * c0.T_BS;
   cv::Mat R(3, 3, CV_64F), T(3, 1, CV_64F);
@@ -183,10 +186,9 @@ Result<std::unique_ptr<StereoSource>> openEurocSource(const std::string& dir) {
   if (!c1) return c1.status();
   if (c0->t_ns != c1->t_ns)
     return Status::corruptData("EuRoC cam0 and cam1 list different timestamps in " + dir);
-  if (c0->size != c1->size)
-    return Status::corruptData("EuRoC cam0 and cam1 resolutions differ in " + dir);
-  const Rectification rect = rectify(*c0, *c1);
-  const cv::Mat &R0 = rect.R0, &R1 = rect.R1, &P0 = rect.P0, &P1 = rect.P1;
+  auto rect = rectify(*c0, *c1, dir);
+  if (!rect) return rect.status();
+  const cv::Mat &R0 = rect->R0, &R1 = rect->R1, &P0 = rect->P0, &P1 = rect->P1;
   cv::Mat m0x, m0y, m1x, m1y;
   cv::initUndistortRectifyMap(c0->K, c0->D, R0, P0, c0->size, CV_16SC2, m0x, m0y);
   cv::initUndistortRectifyMap(c1->K, c1->D, R1, P1, c1->size, CV_16SC2, m1x, m1y);
@@ -209,12 +211,11 @@ Result<Eigen::Isometry3d> eurocBodyToRectifiedLeft(const std::string& dir) {
   if (!c0) return c0.status();
   auto c1 = readCameraModel(mav / "cam1");
   if (!c1) return c1.status();
-  if (c0->size != c1->size)
-    return Status::corruptData("EuRoC cam0 and cam1 resolutions differ in " + dir);
-  const Rectification rect = rectify(*c0, *c1);
+  auto rect = rectify(*c0, *c1, dir);
+  if (!rect) return rect.status();
   Eigen::Isometry3d T_cam0_rect = Eigen::Isometry3d::Identity();
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) T_cam0_rect.linear()(r, c) = rect.R0.at<double>(c, r);  // R0^T
+    for (int c = 0; c < 3; ++c) T_cam0_rect.linear()(r, c) = rect->R0.at<double>(c, r);  // R0^T
   if (!T_cam0_rect.matrix().allFinite())
     return Status::corruptData("EuRoC rectification of " + dir + " is not finite");
   return c0->T_BS * T_cam0_rect;
